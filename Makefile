@@ -1,0 +1,26 @@
+# The two commands of README.md. Both set everything up on first use (scripts/setup_env.sh):
+# the project's venv from PyPI, the ROS 2 wheels' CMake fix, and the colcon workspace.
+.PHONY: run test setup lint bench clean
+
+# Arguments for `make run` (e.g. make run RUN_ARGS="--name demo").
+RUN_ARGS ?=
+# Arguments for pytest in `make test` (e.g. make test PYTEST_ARGS="-k msgs").
+PYTEST_ARGS ?=
+
+run: setup
+	@scripts/with_env.sh python scripts/run_paper.py $(RUN_ARGS)
+
+test: setup
+	@scripts/with_env.sh python -m pytest $(PYTEST_ARGS)
+
+setup:
+	@scripts/setup_env.sh
+
+lint: setup
+	@scripts/with_env.sh python -m flake8 src scripts tests
+
+bench: setup
+	@scripts/with_env.sh python scripts/bench_filter.py
+
+clean:
+	rm -rf build install log

@@ -1,0 +1,242 @@
+"""One SAT agent without transport: (k, s_k, Z_k, neighbours' reports) -> action and report.
+
+``Agent.step`` runs, at step k (the filter was predicted to k at the end of step k-1):
+
+1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k;
+2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation");
+3. tracking overlap: for every neighbour that, like this agent, was in TRACK at k-1, add the
+   incremental score (Eqn. ospa) of the two agents' k-1 reports (poses s_{k-1} and predicted
+   positions x + v T) to the window; leave TRACK when the window says overlap and this agent is
+   the leaver;
+4. update the mode (SEARCH/TRACK) from the number of targets in X-hat_k;
+5. in SEARCH, mark the walk's nodes in view as visited and (re)plan when the rules of
+   SearchPlanner say so, jointly with the searching agents in range;
+6. predict the SAT-PHD to k+1 with s_k (Eqn. satphd_predict) and choose the action: the search
+   control (nearest admissible pose to the next node) in SEARCH, the Renyi-divergence tracking
+   control (Eqn. track_control) on the predicted PHD and the predicted multi-target state
+   X-hat_{k+1|k} in TRACK;
+7. publish the report of step k: search density, multi-target estimate, mode (what the paper
+   exchanges) with agent id, step and pose as header.
+
+Agreeing on a joint plan without extra messages: every member of a group must compute the same
+partition of the unvisited nodes. So a joint plan at step k is made only from the reports of
+step k-1 of all members, the agent's *own* k-1 report included (not its newer state): the
+starts are the members' k-1 poses and the node values come from the elementwise max of their
+k-1 search densities. The group is this agent plus the senders of the inbox's reports that were
+in SEARCH at k-1; since radio range is symmetric, two agents in range see each other's k-1
+report at the same step, detect the same replanning event (first contact, a member leaving
+SEARCH) and compute identical node partitions independently. Replans that only one agent makes
+(own walk exhausted, own return to SEARCH) are made alone from its current state.
+"""
+
+from dataclasses import dataclass
+from typing import List, Optional, Sequence
+
+import numpy as np
+
+from sat_agent.actions import candidate_poses
+from sat_agent.config import SatParams
+from sat_agent.mode_machine import Mode, ModeMachine
+from sat_agent.phd_filter import SatPhdFilter
+from sat_agent.search_density import SearchDensity
+from sat_agent.search_map import SearchMap
+from sat_agent.search_planning import ReplanReason, search_action, SearchPlanner
+from sat_agent.state_extraction import extract_targets, MultiTargetEstimate
+from sat_agent.tracking_control import tracking_action
+from sat_agent.tracking_overlap import OverlapMonitor
+
+# Fixed part of a report on the wire: agent id, step (int32 each), pose (2 float64), mode
+# (uint8), cardinality (float64). Used for the radio's byte accounting.
+_HEADER_BYTES = 4 + 4 + 16 + 1 + 8
+# One TargetEstimate: position (2), velocity (2), covariance (16), weight (1) as float64.
+_TARGET_BYTES = 8 * (2 + 2 + 16 + 1)
+
+
+@dataclass(frozen=True, eq=False)
+class AgentReport:
+    """What one agent tells its neighbours at step k: search density, estimate and mode.
+
+    agent_id, step and pose are header data; search_values is the (ny, nx) search density
+    (values in [0, 1], search_density.py's convention) after fusion at step k.
+    """
+
+    agent_id: int
+    step: int
+    pose: np.ndarray
+    mode: Mode
+    search_values: np.ndarray
+    estimate: MultiTargetEstimate
+
+    @property
+    def nbytes(self) -> int:
+        """Size of the report on the wire (header, float64 density, targets)."""
+        return (_HEADER_BYTES + int(self.search_values.nbytes)
+                + _TARGET_BYTES * len(self.estimate.targets))
+
+    def target_positions(self) -> np.ndarray:
+        """(n, 2) estimated target positions."""
+        return self.estimate.positions()
+
+    def predicted_positions(self, dt: float) -> np.ndarray:
+        """(n, 2) positions one step ahead (x + v T): X-hat_{k+1|k} for the overlap test."""
+        targets = self.estimate.targets
+        if not targets:
+            return np.zeros((0, 2))
+        return np.array([t.position + dt * t.velocity for t in targets], dtype=float)
+
+
+@dataclass(frozen=True, eq=False)
+class AgentOutput:
+    """The result of one step: the action for the world and the report for the neighbours.
+
+    goal is the point the action steers to (next walk node in SEARCH, the chosen pose in TRACK);
+    plan is the remaining walk as (K, 2) points ending with its start (empty in TRACK);
+    left_overlap_with is the neighbour whose tracking overlap made this agent leave TRACK at
+    this step, else None.
+    """
+
+    action: int
+    goal: np.ndarray
+    report: AgentReport
+    estimate: MultiTargetEstimate
+    plan: np.ndarray
+    mode: Mode
+    left_overlap_with: Optional[int] = None
+    replan: ReplanReason = ReplanReason.NONE
+
+
+class Agent:
+    """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
+
+    Same constructor arguments and same step inputs give the same outputs: the only randomness
+    is the filter's, drawn from a generator seeded with (seed, agent_id).
+    """
+
+    def __init__(self, agent_id: int, params: SatParams, initial_pose, seed: int = 0):
+        self.agent_id = int(agent_id)
+        self.params = params
+        self._rng = np.random.default_rng(np.random.SeedSequence(int(seed),
+                                                                 spawn_key=(self.agent_id,)))
+        self.filter = SatPhdFilter(params, self._rng)
+        self.search_map = SearchMap.for_area(params.area, params.search.node_spacing)
+        self.planner = SearchPlanner(self.search_map, params)
+        self.modes = ModeMachine(params)
+        self.overlap = OverlapMonitor(params)
+        self._scratch = SearchDensity(self.filter.search.lattice)
+        self._last_report: Optional[AgentReport] = None
+        self.dropped_reports = 0
+        # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
+        self.filter.predict(np.asarray(initial_pose, dtype=float))
+
+    @property
+    def mode(self) -> Mode:
+        """Return the current mode, SEARCH or TRACK."""
+        return self.modes.mode
+
+    def step(self, step: int, pose, measurements, inbox: Sequence[AgentReport]) -> AgentOutput:
+        """Run one step k (module docstring); inbox holds the neighbours' reports of step k-1."""
+        pose = np.asarray(pose, dtype=float).reshape(2)
+        measurements = np.asarray(measurements, dtype=float).reshape(-1, 2)
+        reports = self._valid_reports(step, inbox)
+        self.filter.correct(measurements, pose)
+        estimate = extract_targets(self.filter.targets, pose, self.params)
+        for report in reports:
+            self.filter.search.fuse(report.search_values)
+        was_tracking = self.modes.mode == Mode.TRACK
+        leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
+        mode = self.modes.update(len(estimate.targets), leaving_for is not None)
+        replan = ReplanReason.NONE
+        if mode == Mode.SEARCH:
+            replan = self._search_plan(pose, reports, resumed=was_tracking)
+        self.filter.predict(pose)
+        if mode == Mode.SEARCH:
+            goal = self._search_goal(pose)
+            action = search_action(pose, goal, self.params)
+            plan = self.planner.walk_points()
+        else:
+            predicted = extract_targets(self.filter.targets, pose, self.params)
+            action, _ = tracking_action(self.filter.targets, predicted, pose, self.params)
+            goal = candidate_poses(pose, self.params.actions)[action]
+            plan = np.zeros((0, 2))
+        report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
+                             self.filter.search.values.copy(), estimate)
+        self._last_report = report
+        return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
+                           mode, leaving_for, replan)
+
+    def _valid_reports(self, step: int, inbox: Sequence[AgentReport]) -> List[AgentReport]:
+        """Keep the well-formed reports of step k-1 from other agents, one per sender, by id."""
+        shape = self.filter.search.values.shape
+        kept = {}
+        for report in inbox:
+            good = (report.step == step - 1 and report.agent_id != self.agent_id
+                    and report.agent_id not in kept
+                    and np.shape(report.search_values) == shape
+                    and np.all(np.isfinite(report.search_values))
+                    and np.shape(report.pose) == (2,) and np.all(np.isfinite(report.pose)))
+            if good:
+                kept[report.agent_id] = report
+            else:
+                self.dropped_reports += 1
+        return [kept[agent] for agent in sorted(kept)]
+
+    def _overlap_leaver(self, step: int, reports: Sequence[AgentReport]) -> Optional[int]:
+        """Feed the overlap windows with the k-1 reports; return the neighbour to yield to.
+
+        Both sides use the two k-1 reports (the own one included), so they compute the same
+        symmetric score and agree on who leaves (OverlapMonitor.leaver).
+        """
+        own = self._last_report
+        if own is None or own.mode != Mode.TRACK:
+            return None
+        dt = self.params.motion.dt
+        leave_for = None
+        for report in reports:
+            if report.mode != Mode.TRACK:
+                continue
+            self.overlap.observe(step, own.pose, own.predicted_positions(dt), report.agent_id,
+                                 report.pose, report.predicted_positions(dt))
+            overlapping = self.overlap.overlapping(report.agent_id)
+            if overlapping and leave_for is None and (
+                    self.overlap.leaver(self.agent_id, report.agent_id) == self.agent_id):
+                leave_for = report.agent_id
+        if leave_for is not None:
+            for report in reports:
+                self.overlap.reset(report.agent_id)
+        return leave_for
+
+    def _search_plan(self, pose: np.ndarray, reports: Sequence[AgentReport],
+                     resumed: bool) -> ReplanReason:
+        """Mark visited nodes and replan when SearchPlanner's rules say so (module docstring)."""
+        own_values = self.search_map_values(self.filter.search.values)
+        self.planner.mark_visited(pose, own_values)
+        searching = [r for r in reports if r.mode == Mode.SEARCH]
+        group = frozenset([self.agent_id] + [r.agent_id for r in searching])
+        released = any(r.mode != Mode.SEARCH and r.agent_id in self.planner.group
+                       for r in reports)
+        reason = self.planner.needs_replan(group, released, resumed)
+        if not reason:
+            return reason
+        own = self._last_report
+        joint = (searching and own is not None and own.mode == Mode.SEARCH
+                 and reason in (ReplanReason.NEW_NEIGHBOUR, ReplanReason.RELEASED))
+        if joint:
+            members = [own] + searching
+            starts = {r.agent_id: r.pose for r in members}
+            fused = np.maximum.reduce([r.search_values for r in members])
+            self.planner.plan(self.agent_id, starts, self.search_map_values(fused))
+        else:
+            self.planner.plan(self.agent_id, {self.agent_id: pose}, own_values)
+        # The new walk may start with nodes already in view from s_k.
+        self.planner.mark_visited(pose, own_values)
+        return reason
+
+    def _search_goal(self, pose: np.ndarray) -> np.ndarray:
+        goal = self.planner.next_goal()
+        return pose if goal is None else goal
+
+    def search_map_values(self, density_values: np.ndarray) -> np.ndarray:
+        """Eqn. search_value of every search-map node for a (ny, nx) search density."""
+        self._scratch.values = density_values
+        return self._scratch.node_values(self.search_map.centers, self.search_map.spacing)
+

@@ -1,0 +1,316 @@
+"""Parameters of the SAT problem and of the agent, with the paper's defaults.
+
+Every number the paper gives (Section "Experimental Setup") is a default here; every number it
+leaves open is a default chosen and justified next to its field. ``SatParams.from_mapping`` reads
+the nested YAML form (``config/paper.yaml``) or ROS 2's flattened dotted names
+(``sensor.square_side``) and refuses unknown keys and out-of-range values with a message naming
+the key, the value and what is allowed.
+"""
+
+from dataclasses import dataclass, field, fields, is_dataclass, replace
+import math
+from typing import Any, Mapping
+
+
+class ParameterError(ValueError):
+    """A parameter (from YAML, ROS or code) that is unknown or outside its allowed range."""
+
+
+def _check(key: str, value: Any, low: float, high: float, *, low_open=False, high_open=False):
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"parameter '{key}' = {value!r}: must be a number") from None
+    if not math.isfinite(number):
+        raise ParameterError(f"parameter '{key}' = {value!r}: must be finite")
+    too_low = number <= low if low_open else number < low
+    too_high = number >= high if high_open else number > high
+    if too_low or too_high:
+        left = '(' if low_open else '['
+        right = ')' if high_open else ']'
+        raise ParameterError(
+            f"parameter '{key}' = {value!r}: allowed range is {left}{low}, {high}{right}")
+
+
+INF = math.inf
+
+
+@dataclass(frozen=True)
+class AreaParams:
+    """The surveillance region A = [0, width] x [0, height] (metres)."""
+
+    width: float = 100.0
+    height: float = 100.0
+
+    def validate(self, prefix='area'):
+        _check(f'{prefix}.width', self.width, 0, INF, low_open=True)
+        _check(f'{prefix}.height', self.height, 0, INF, low_open=True)
+
+    @property
+    def size(self) -> float:
+        """|A|, the area of the region in square metres."""
+        return self.width * self.height
+
+
+@dataclass(frozen=True)
+class MotionParams:
+    """Near-constant-velocity target model (Section Evaluation: F, Q with T = 1 s)."""
+
+    dt: float = 1.0
+    p_survival: float = 0.99
+    # Scale of the paper's Q; 1.0 is the paper's model.
+    process_noise: float = 1.0
+
+    def validate(self, prefix='motion'):
+        _check(f'{prefix}.dt', self.dt, 0, INF, low_open=True)
+        _check(f'{prefix}.p_survival', self.p_survival, 0, 1, low_open=True)
+        _check(f'{prefix}.process_noise', self.process_noise, 0, INF)
+
+
+@dataclass(frozen=True)
+class SensorParams:
+    """Range/bearing sensor with a square field of view (Eqn. sensing_model)."""
+
+    square_side: float = 10.0          # a: the sensing area S_a is an a x a square
+    p_detect: float = 0.99             # p_D^max inside the square, 0 outside
+    sigma_range_0: float = 1.0         # zeta_0 (m)
+    sigma_range_slope: float = 5e-3    # beta_zeta (1/m): sigma_r = zeta_0 + beta_zeta d^2
+    sigma_bearing_0: float = math.pi / 180.0   # phi_0 (rad)
+    sigma_bearing_slope: float = 1e-5  # beta_phi (rad/m): sigma_b = phi_0 + beta_phi d
+    clutter_rate: float = 10.0         # lambda: Poisson mean of false alarms per scan
+
+    def validate(self, prefix='sensor'):
+        _check(f'{prefix}.square_side', self.square_side, 0, INF, low_open=True)
+        _check(f'{prefix}.p_detect', self.p_detect, 0, 1, low_open=True)
+        _check(f'{prefix}.sigma_range_0', self.sigma_range_0, 0, INF, low_open=True)
+        _check(f'{prefix}.sigma_range_slope', self.sigma_range_slope, 0, INF)
+        _check(f'{prefix}.sigma_bearing_0', self.sigma_bearing_0, 0, math.pi, low_open=True)
+        _check(f'{prefix}.sigma_bearing_slope', self.sigma_bearing_slope, 0, INF)
+        _check(f'{prefix}.clutter_rate', self.clutter_rate, 0, 1e4)
+
+    @property
+    def max_range(self) -> float:
+        """Largest range inside the sensing square (its half diagonal)."""
+        return self.square_side / math.sqrt(2.0)
+
+
+@dataclass(frozen=True)
+class ActionParams:
+    """Agent control set of Eqn. controlVectors: 1 + N_R * N_theta admissible displacements."""
+
+    radial_step: float = 2.0   # Delta_R (m)
+    n_radial: int = 2          # N_R
+    n_angular: int = 8         # N_theta
+
+    def validate(self, prefix='actions'):
+        _check(f'{prefix}.radial_step', self.radial_step, 0, INF, low_open=True)
+        _check(f'{prefix}.n_radial', self.n_radial, 1, 16)
+        _check(f'{prefix}.n_angular', self.n_angular, 1, 64)
+
+    @property
+    def count(self) -> int:
+        """Number of actions, including 'stay' (17 with the paper's values)."""
+        return 1 + int(self.n_radial) * int(self.n_angular)
+
+
+@dataclass(frozen=True)
+class PhdParams:
+    """SMC-PHD budgets and birth model; the paper leaves all of these open."""
+
+    # Uniform births over A: expected new targets per step. The paper's run has 2 births in
+    # 200 steps, so 0.01 matches its rate; the mass stays diffuse (1e-6 per m^2).
+    birth_rate: float = 0.01
+    birth_particles_uniform: int = 2000
+    # Measurement-driven births inside the sensing square (adaptive birth, Ristic et al. 2012):
+    # each scan spreads this mass over its measurements; clutter-born mass is killed by the next
+    # update, target-born mass is confirmed by it.
+    birth_mass_measurement: float = 0.2
+    birth_particles_per_measurement: int = 100
+    birth_velocity_std: float = 1.0    # m/s, prior spread of a newborn's velocity
+    particles_per_target: int = 2000   # resampling budget per unit of PHD mass
+    min_particles: int = 2000
+    max_particles: int = 20000
+    # State extraction looks at the PHD inside the sensing square grown by this margin: a target
+    # moves ~1 m/step and the agent up to 4 m/step, so 5 m keeps a tracked target in the region
+    # for a step even when it leaves the square.
+    extraction_margin: float = 5.0
+
+    def validate(self, prefix='phd'):
+        _check(f'{prefix}.birth_rate', self.birth_rate, 0, 10)
+        _check(f'{prefix}.birth_particles_uniform', self.birth_particles_uniform, 0, 1e6)
+        _check(f'{prefix}.birth_mass_measurement', self.birth_mass_measurement, 0, 10)
+        _check(f'{prefix}.birth_particles_per_measurement',
+               self.birth_particles_per_measurement, 0, 1e5)
+        _check(f'{prefix}.birth_velocity_std', self.birth_velocity_std, 0, 100)
+        _check(f'{prefix}.particles_per_target', self.particles_per_target, 1, 1e6)
+        _check(f'{prefix}.min_particles', self.min_particles, 1, 1e7)
+        _check(f'{prefix}.max_particles', self.max_particles, self.min_particles, 1e7)
+        _check(f'{prefix}.extraction_margin', self.extraction_margin, 0, 100)
+
+
+@dataclass(frozen=True)
+class SearchParams:
+    """Search density (virtual-target lattice) and search map; the paper gives only J."""
+
+    decay: float = 0.999           # J_k(x), constant (Section Evaluation)
+    # Virtual targets on a regular lattice shared by every agent, so densities fuse elementwise.
+    lattice_spacing: float = 1.0
+    # Search-map nodes on a grid with the sensing square's side: one node per sensing footprint,
+    # so visiting every node sweeps the whole area once.
+    node_spacing: float = 10.0
+    # beta: a node is unvisited when its search value is <= beta. 0.5 means "less than half of
+    # its region seen recently"; a fully searched region takes ln(0.5)/ln(0.999) ~ 693 steps to
+    # need a revisit.
+    unvisited_threshold: float = 0.5
+
+    def validate(self, prefix='search'):
+        _check(f'{prefix}.decay', self.decay, 0, 1)
+        _check(f'{prefix}.lattice_spacing', self.lattice_spacing, 0, INF, low_open=True)
+        _check(f'{prefix}.node_spacing', self.node_spacing, 0, INF, low_open=True)
+        _check(f'{prefix}.unvisited_threshold', self.unvisited_threshold, 0, 1, high_open=True)
+
+
+@dataclass(frozen=True)
+class CooperationParams:
+    """Radio range, tracking control and tracking-overlap parameters."""
+
+    comm_range: float = 50.0       # C_R (m)
+    renyi_alpha: float = 0.5       # alpha of Eqn. track_control
+    # OSPA cut-off c of Eqn. ospa: twice the sensing square, so sets a square apart score c.
+    ospa_cutoff: float = 10.0
+    # Overlap: cumulative score over `overlap_window` steps <= Q_Th means "same targets"; 2 m
+    # per step is well above the spread of two agents' estimates of one target.
+    overlap_window: int = 5
+    overlap_threshold: float = 10.0
+    # TRACK falls back to SEARCH after this many consecutive steps with no estimated target.
+    track_timeout: int = 5
+
+    def validate(self, prefix='cooperation'):
+        _check(f'{prefix}.comm_range', self.comm_range, 0, INF)
+        _check(f'{prefix}.renyi_alpha', self.renyi_alpha, 0, 1, low_open=True, high_open=True)
+        _check(f'{prefix}.ospa_cutoff', self.ospa_cutoff, 0, INF, low_open=True)
+        _check(f'{prefix}.overlap_window', self.overlap_window, 1, 10000)
+        _check(f'{prefix}.overlap_threshold', self.overlap_threshold, 0, INF)
+        _check(f'{prefix}.track_timeout', self.track_timeout, 1, 10000)
+
+
+@dataclass(frozen=True)
+class SatParams:
+    """All parameters of one agent (and of the world it assumes)."""
+
+    area: AreaParams = field(default_factory=AreaParams)
+    motion: MotionParams = field(default_factory=MotionParams)
+    sensor: SensorParams = field(default_factory=SensorParams)
+    actions: ActionParams = field(default_factory=ActionParams)
+    phd: PhdParams = field(default_factory=PhdParams)
+    search: SearchParams = field(default_factory=SearchParams)
+    cooperation: CooperationParams = field(default_factory=CooperationParams)
+
+    def validate(self) -> 'SatParams':
+        """Check every group; raise ParameterError naming the first bad key."""
+        for group in fields(self):
+            getattr(self, group.name).validate(group.name)
+        return self
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any]) -> 'SatParams':
+        """Build from nested groups ({'sensor': {'square_side': 10}}) or dotted keys.
+
+        Keys outside the known groups and fields raise ParameterError.
+        """
+        nested = _nest(values)
+        groups = {}
+        for group in fields(cls):
+            given = nested.pop(group.name, {})
+            if not isinstance(given, Mapping):
+                raise ParameterError(
+                    f"parameter '{group.name}' = {given!r}: must be a mapping of "
+                    f'{[f.name for f in fields(group.default_factory)]}')
+            groups[group.name] = _build_group(group.name, group.default_factory, given)
+        if nested:
+            allowed = [g.name for g in fields(cls)]
+            raise ParameterError(
+                f'unknown parameter group(s) {sorted(nested)}: allowed groups are {allowed}')
+        return cls(**groups).validate()
+
+    def with_overrides(self, values: Mapping[str, Any]) -> 'SatParams':
+        """Return a copy with some dotted or nested values replaced (validated)."""
+        merged = {g.name: _as_dict(getattr(self, g.name)) for g in fields(self)}
+        for group, entries in _nest(values).items():
+            if group not in merged or not isinstance(entries, Mapping):
+                raise ParameterError(f'unknown parameter group {group!r}')
+            merged[group].update(entries)
+        return SatParams.from_mapping(merged)
+
+
+def _as_dict(obj) -> dict:
+    return {f.name: getattr(obj, f.name) for f in fields(obj)}
+
+
+def _nest(values: Mapping[str, Any]) -> dict:
+    nested: dict = {}
+    for key, value in values.items():
+        head, _, tail = str(key).partition('.')
+        if tail:
+            nested.setdefault(head, {})
+            if not isinstance(nested[head], dict):
+                raise ParameterError(f"parameter '{head}' given both as a value and a group")
+            nested[head][tail] = value
+        elif isinstance(value, Mapping):
+            nested.setdefault(head, {}).update(value)
+        else:
+            nested[head] = value
+    return nested
+
+
+def _build_group(name: str, cls, given: Mapping[str, Any]):
+    known = {f.name: f for f in fields(cls)}
+    unknown = sorted(set(given) - set(known))
+    if unknown:
+        raise ParameterError(
+            f"unknown parameter(s) {[f'{name}.{k}' for k in unknown]}: "
+            f'allowed are {[f"{name}.{k}" for k in known]}')
+    values = {}
+    for key, value in given.items():
+        default = getattr(cls(), key)
+        if isinstance(default, bool) or is_dataclass(default):
+            values[key] = value
+        elif isinstance(default, int):
+            if isinstance(value, bool) or not float(_number(name, key, value)).is_integer():
+                raise ParameterError(f"parameter '{name}.{key}' = {value!r}: must be an integer")
+            values[key] = int(value)
+        else:
+            values[key] = float(_number(name, key, value))
+    return replace(cls(), **values)
+
+
+def _number(group: str, key: str, value: Any) -> float:
+    if isinstance(value, bool):
+        raise ParameterError(f"parameter '{group}.{key}' = {value!r}: must be a number")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"parameter '{group}.{key}' = {value!r}: must be a number") from None
+
+
+def load_params_file(path) -> SatParams:
+    """Read the SatParams groups of a ROS 2 parameter file's ``/**: ros__parameters:`` section.
+
+    Keys of that section that are not SatParams groups (node-level settings) are ignored here;
+    the node that owns them reads them.
+    """
+    import yaml
+
+    with open(path, encoding='utf-8') as stream:
+        try:
+            document = yaml.safe_load(stream)
+        except yaml.YAMLError as error:
+            raise ParameterError(f'{path}: not valid YAML: {error}') from None
+    try:
+        section = document['/**']['ros__parameters']
+    except (TypeError, KeyError):
+        raise ParameterError(
+            f"{path}: expected a '/**: ros__parameters:' section (ROS 2 parameter file)") from None
+    groups = {g.name for g in fields(SatParams)}
+    return SatParams.from_mapping({k: v for k, v in section.items() if k in groups})

@@ -1,0 +1,209 @@
+"""SMC-PHD filter for true targets plus the search density: the SAT-PHD filter of the paper.
+
+True-target PHD D^1 is a weighted particle set (Vo, Singh and Doucet 2003); the virtual-target PHD
+D^0 is the lattice of ``search_density``. One step is ``predict(s_{k-1})`` (Eqn. satphd_predict)
+then ``correct(Z_k, s_k)`` (Eqn. satphd_correct).
+
+Birth intensity b_k(x) of Eqn. satphd_predict, with x = [p, v] (position p, velocity v):
+
+    b_k(x) = r_u U_A(p) N(v; 0, sigma_v^2 I)
+           + sum_{z in Z'_{k-1}} (m_z / |Z'_{k-1}|) integral pi(x | x') beta_z(x') dx',
+    beta_z(x') = law of p' = h^{-1}(z + e, s_{k-1}), e ~ N(0, Sigma(z)), kept when p' is in
+                 S_a(s_{k-1}), times N(v'; 0, sigma_v^2 I),
+
+- uniform part: mass r_u = ``phd.birth_rate`` per step, positions uniform over A, velocities
+  N(0, sigma_v^2), sigma_v = ``phd.birth_velocity_std``; ``phd.birth_particles_uniform`` particles
+  of weight r_u / n_u each, drawn at every predict.
+- measurement-driven part (adaptive birth, Ristic, Clark, Vo and Vo 2012): after the update with
+  Z_k, for every z in Z' (the measurements whose position h^{-1}(z, s_k) lies in the sensing
+  square, the only place a target can be detected), ``phd.birth_particles_per_measurement``
+  particles are drawn at h^{-1}(z + v, s_k), v ~ N(0, diag(sigma_r^2, sigma_b^2)) at z's range,
+  with velocity N(0, sigma_v^2); draws that land outside the square are dropped. Their weight is
+  m_z / (|Z'| n_z), m_z = ``phd.birth_mass_measurement``. They are kept aside (not in the
+  posterior, so they do not bias the extracted count) and join the targets at the next predict,
+  where they are propagated with the motion model like every particle; the next scan then
+  confirms them (a target is there) or kills them (clutter). Newborns that the next square does
+  not cover (the agent moved away) are dropped at that correction: they could be neither
+  confirmed nor killed and would otherwise linger as ghost mass next to the square.
+
+Gating: p_D is 0 outside the sensing square, so the update leaves those particles' weights
+unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the particles inside.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sat_agent import motion_model, sensor_model
+from sat_agent.config import PhdParams, SatParams, SensorParams
+from sat_agent.search_density import Lattice, SearchDensity
+
+# Largest exponent used when scaling the clutter term; exp(700) is finite in float64, and a
+# clutter term that large makes the measurement's contribution vanish anyway.
+_MAX_EXPONENT = 700.0
+
+
+@dataclass
+class ParticlePHD:
+    """Weighted particles of the true-target PHD: rows of ``states`` are [x, vx, y, vy]."""
+
+    states: np.ndarray   # (N, 4)
+    weights: np.ndarray  # (N,)
+
+    @property
+    def mass(self) -> float:
+        """Expected number of targets, the integral of the PHD."""
+        return float(self.weights.sum())
+
+    @classmethod
+    def empty(cls) -> 'ParticlePHD':
+        """Return a PHD with no particles (no targets)."""
+        return cls(np.zeros((0, 4)), np.zeros(0))
+
+    def __len__(self) -> int:
+        return len(self.weights)
+
+
+def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
+                   sensor: SensorParams) -> np.ndarray:
+    """Return the corrected weights of Eqn. satphd_correct (true-target part).
+
+    w_i <- [1 - p_D(x_i) + sum_z p_D(x_i) g(z | x_i) / (kappa(z) + tau(z))] w_i,
+    tau(z) = sum_j p_D(x_j) g(z | x_j) w_j, kappa = lambda f_c (sensor_model.clutter_intensity).
+
+    Only particles inside the sensing square are touched; the others are copied bit for bit.
+    Each measurement's column is scaled by its largest log-likelihood before exponentiating, so
+    g values far below float range do not underflow to 0 / 0. When kappa = 0 and no particle
+    can have produced z (tau(z) = 0) the term is 0 / 0; it is taken as 0: z then says nothing
+    about the existing particles (the measurement-driven birth accounts for it).
+    """
+    new_weights = np.array(weights, dtype=float, copy=True)
+    inside = np.flatnonzero(sensor_model.in_sensing_square(
+        motion_model.positions(states), pose, sensor.square_side))
+    if inside.size == 0:
+        return new_weights
+    w_in = new_weights[inside]
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    p_d = sensor.p_detect
+    detected = np.zeros(inside.size)
+    if len(z):
+        log_g = sensor_model.log_likelihood(z, motion_model.positions(states[inside]), pose,
+                                            sensor)
+        peak = log_g.max(axis=0)                    # (M,) scale per measurement
+        np.subtract(log_g, peak, out=log_g)
+        g_scaled = np.exp(log_g, out=log_g)         # g / exp(peak), in (0, 1]
+        tau_scaled = p_d * (w_in @ g_scaled)        # tau(z) / exp(peak)
+        kappa = sensor_model.clutter_intensity(sensor)
+        if kappa > 0.0:
+            kappa_scaled = np.exp(np.minimum(np.log(kappa) - peak, _MAX_EXPONENT))
+        else:
+            kappa_scaled = np.zeros_like(peak)
+        denominator = kappa_scaled + tau_scaled
+        inverse = np.divide(1.0, denominator, out=np.zeros_like(denominator),
+                            where=denominator > 0.0)
+        detected = p_d * (g_scaled @ inverse)
+    new_weights[inside] = w_in * ((1.0 - p_d) + detected)
+    return new_weights
+
+
+def systematic_resample(weights: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Draw ``count`` indices by systematic resampling (one uniform offset, N strata)."""
+    cumulative = np.cumsum(weights)
+    total = cumulative[-1]
+    points = (rng.random() + np.arange(count)) * (total / count)
+    return np.minimum(np.searchsorted(cumulative, points, side='right'), len(weights) - 1)
+
+
+def particle_budget(mass: float, phd: PhdParams) -> int:
+    """Particles kept after resampling: particles_per_target per unit of mass, clipped."""
+    wanted = int(round(mass * phd.particles_per_target))
+    return int(np.clip(wanted, phd.min_particles, phd.max_particles))
+
+
+def resample(phd_set: ParticlePHD, params: PhdParams, rng: np.random.Generator) -> ParticlePHD:
+    """Resample to the budget; every particle gets weight mass / N, so the mass is kept."""
+    mass = phd_set.mass
+    if len(phd_set) == 0 or not mass > 0.0:
+        return ParticlePHD.empty()
+    count = particle_budget(mass, params)
+    index = systematic_resample(phd_set.weights, count, rng)
+    return ParticlePHD(phd_set.states[index], np.full(count, mass / count))
+
+
+def uniform_births(params: SatParams, rng: np.random.Generator) -> ParticlePHD:
+    """Uniform part of b_k: birth_rate mass over A, velocities N(0, birth_velocity_std^2)."""
+    count = params.phd.birth_particles_uniform
+    if count == 0 or params.phd.birth_rate == 0.0:
+        return ParticlePHD.empty()
+    states = np.empty((count, 4))
+    states[:, 0] = rng.uniform(0.0, params.area.width, count)
+    states[:, 2] = rng.uniform(0.0, params.area.height, count)
+    states[:, [1, 3]] = rng.normal(0.0, params.phd.birth_velocity_std, (count, 2))
+    return ParticlePHD(states, np.full(count, params.phd.birth_rate / count))
+
+
+def measurement_births(measurements: np.ndarray, pose, params: SatParams,
+                       rng: np.random.Generator) -> ParticlePHD:
+    """Measurement-driven part of b_{k+1} from Z_k (see the module docstring)."""
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    sensor = params.sensor
+    per_z = params.phd.birth_particles_per_measurement
+    z = z[sensor_model.in_sensing_square(sensor_model.to_position(z, pose), pose,
+                                         sensor.square_side)]
+    if len(z) == 0 or per_z == 0 or params.phd.birth_mass_measurement == 0.0:
+        return ParticlePHD.empty()
+    repeated = np.repeat(z, per_z, axis=0)
+    sigma_r, sigma_b = sensor_model.measurement_sigmas(repeated[:, 0], sensor)
+    noisy = repeated + rng.standard_normal(repeated.shape) * np.column_stack([sigma_r, sigma_b])
+    points = sensor_model.to_position(noisy, pose)
+    keep = sensor_model.in_sensing_square(points, pose, sensor.square_side)
+    count = int(keep.sum())
+    states = np.empty((count, 4))
+    states[:, motion_model.POSITION] = points[keep]
+    states[:, motion_model.VELOCITY] = rng.normal(0.0, params.phd.birth_velocity_std, (count, 2))
+    weight = params.phd.birth_mass_measurement / (len(z) * per_z)
+    return ParticlePHD(states, np.full(count, weight))
+
+
+class SatPhdFilter:
+    """SAT-PHD filter of one agent: true-target particles and the virtual-target lattice."""
+
+    def __init__(self, params: SatParams, rng: np.random.Generator):
+        self.params = params
+        self.rng = rng
+        self.targets = ParticlePHD.empty()
+        self.search = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing))
+        # Measurement-driven births from the last scan, joining the targets at the next predict.
+        self.pending_births = ParticlePHD.empty()
+        self._newborn = slice(0, 0)
+
+    def predict(self, previous_pose) -> None:
+        """Eqn. satphd_predict: survival p_S, NCV transition, births, search-density decay."""
+        params = self.params
+        survivors = len(self.targets)
+        moving = np.concatenate([self.targets.states, self.pending_births.states])
+        weights = np.concatenate([self.targets.weights * params.motion.p_survival,
+                                  self.pending_births.weights])
+        moved = motion_model.propagate(moving, params.motion, self.rng)
+        born = uniform_births(params, self.rng)
+        self.targets = ParticlePHD(np.concatenate([moved, born.states]),
+                                   np.concatenate([weights, born.weights]))
+        self._newborn = slice(survivors, len(moving))
+        self.pending_births = ParticlePHD.empty()
+        self.search.predict(previous_pose, params.sensor, params.search.decay)
+
+    def correct(self, measurements: np.ndarray, pose) -> None:
+        """Eqn. satphd_correct: PHD update, search correction, births for k+1, resampling."""
+        params = self.params
+        weights = update_weights(self.targets.states, self.targets.weights, measurements, pose,
+                                 params.sensor)
+        # Newborns from the last scan that the new square does not cover cannot be confirmed or
+        # killed; left alone they would pile up as unobservable ghost mass beside the square.
+        newborn = self.targets.states[self._newborn]
+        untested = ~sensor_model.in_sensing_square(motion_model.positions(newborn), pose,
+                                                   params.sensor.square_side)
+        weights[self._newborn.start + np.flatnonzero(untested)] = 0.0
+        self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
+        self.search.correct(pose, params.sensor)
+        self.pending_births = measurement_births(measurements, pose, params, self.rng)
+        self._newborn = slice(0, 0)

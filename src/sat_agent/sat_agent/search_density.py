@@ -1,0 +1,143 @@
+"""Search density of the SAT-PHD filter: virtual targets on a lattice shared by every agent.
+
+The virtual targets (label 0) are static points; here they are the centres of a regular lattice of
+square cells covering the area A, the same lattice for every agent, so two agents' densities line
+up cell by cell and fuse elementwise (Section "Cooperation": max of local and received values).
+
+Storage convention: ``values = D^0 |A|``, the virtual-target PHD times the area. The correction of
+Eqn. satphd_correct sets D^0 = p_D / |A| = 1 / |A| inside the sensing square, so a cell that has
+just been observed holds 1 and a cell never observed holds 0 (the initial value). Each step a cell
+outside the previous pose's square is multiplied by J (Eqn. satphd_predict, third line), so a cell
+last seen k steps ago holds J^k.
+
+With this convention Eqn. search_value reduces to a mean over the node's region r_v:
+p_search(r_v) = (integral over r_v of D^0) / (|r_v| / |A|)
+             = (sum over cells c in r_v of D^0_c s^2) / (n_v s^2 / |A|)
+             = (1 / n_v) sum over cells c in r_v of values_c,
+where s is the lattice spacing and n_v the number of cells whose centre lies in r_v.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from sat_agent.config import AreaParams, ParameterError, SensorParams
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """Square cells of side ``spacing``; ``nx`` columns along x and ``ny`` rows along y.
+
+    Cell (row j, column i) has its centre at ((i + 0.5) spacing, (j + 0.5) spacing).
+    """
+
+    spacing: float
+    nx: int
+    ny: int
+
+    @classmethod
+    def for_area(cls, area: AreaParams, spacing: float) -> 'Lattice':
+        """Tile [0, width] x [0, height] exactly; the sides must be multiples of spacing."""
+        counts = []
+        for name, side in (('area.width', area.width), ('area.height', area.height)):
+            cells = side / spacing
+            # Exact tiling keeps every agent's lattice identical and every cell inside A.
+            if cells < 1 or abs(cells - round(cells)) > 1e-9 * max(1.0, cells):
+                raise ParameterError(
+                    f"parameter '{name}' = {side!r} is not a whole multiple of "
+                    f"'search.lattice_spacing' = {spacing!r}")
+            counts.append(int(round(cells)))
+        return cls(spacing=float(spacing), nx=counts[0], ny=counts[1])
+
+    def x_centers(self) -> np.ndarray:
+        """(nx,) x coordinates of the cell centres."""
+        return (np.arange(self.nx) + 0.5) * self.spacing
+
+    def y_centers(self) -> np.ndarray:
+        """(ny,) y coordinates of the cell centres."""
+        return (np.arange(self.ny) + 0.5) * self.spacing
+
+    def centers(self) -> np.ndarray:
+        """(ny * nx, 2) cell centres, row-major (the order of ``values.ravel()``)."""
+        x, y = np.meshgrid(self.x_centers(), self.y_centers())
+        return np.column_stack([x.ravel(), y.ravel()])
+
+
+class SearchDensity:
+    """Virtual-target part of the SAT-PHD (Eqns. satphd_predict, satphd_correct, search_value)."""
+
+    def __init__(self, lattice: Lattice):
+        self.lattice = lattice
+        self.values = np.zeros((lattice.ny, lattice.nx))
+        self._xc = lattice.x_centers()
+        self._yc = lattice.y_centers()
+
+    def _observed_window(self, pose, side: float):
+        """Row and column slices of the cells whose centre lies in S_a(pose) (closed square).
+
+        The square is axis-aligned, so the observed cells form one rectangle of the lattice.
+        """
+        half = side / 2.0
+        cols = np.flatnonzero(np.abs(self._xc - float(pose[0])) <= half)
+        rows = np.flatnonzero(np.abs(self._yc - float(pose[1])) <= half)
+        if cols.size == 0 or rows.size == 0:
+            return None
+        return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+
+    def predict(self, previous_pose, sensor: SensorParams, decay: float) -> None:
+        """Third line of Eqn. satphd_predict: D^0 <- [(1 - p_D(s_{k-1})) J + p_D(s_{k-1})] D^0.
+
+        p_D of virtual targets is 1 inside the previous pose's square, so those cells keep their
+        value and every other cell decays by J.
+        """
+        window = self._observed_window(previous_pose, sensor.square_side)
+        kept = None if window is None else self.values[window].copy()
+        self.values *= decay
+        if kept is not None:
+            self.values[window] = kept
+
+    def correct(self, pose, sensor: SensorParams) -> None:
+        """Last two terms of Eqn. satphd_correct: D^0 <- p_D / |A| + (1 - p_D) D^0_{k|k-1}.
+
+        In stored units (times |A|) the observed cells become 1 and the others are unchanged.
+        """
+        window = self._observed_window(pose, sensor.square_side)
+        if window is not None:
+            self.values[window] = 1.0
+
+    def node_values(self, node_centers: np.ndarray, node_spacing: float) -> np.ndarray:
+        """Eqn. search_value for every node: the mean of values over its region r_v.
+
+        r_v is the node_spacing square centred on the node, clipped to the area; a cell belongs
+        to it when its centre lies in [c - node_spacing / 2, c + node_spacing / 2) on both axes
+        (half-open so that adjacent nodes share no cell). A region holding no cell centre gets
+        the value of the cell nearest to the node. Rectangle sums come from a summed-area table,
+        so the cost does not depend on the node size.
+        """
+        centers = np.asarray(node_centers, dtype=float).reshape(-1, 2)
+        half = node_spacing / 2.0
+        x0 = np.searchsorted(self._xc, centers[:, 0] - half, side='left')
+        x1 = np.searchsorted(self._xc, centers[:, 0] + half, side='left')
+        y0 = np.searchsorted(self._yc, centers[:, 1] - half, side='left')
+        y1 = np.searchsorted(self._yc, centers[:, 1] + half, side='left')
+        table = np.zeros((self.lattice.ny + 1, self.lattice.nx + 1))
+        np.cumsum(np.cumsum(self.values, axis=0), axis=1, out=table[1:, 1:])
+        sums = table[y1, x1] - table[y0, x1] - table[y1, x0] + table[y0, x0]
+        counts = (x1 - x0) * (y1 - y0)
+        nearest = self.values[self._nearest_index(self._yc, centers[:, 1]),
+                              self._nearest_index(self._xc, centers[:, 0])]
+        return np.where(counts > 0, sums / np.maximum(counts, 1), nearest)
+
+    @staticmethod
+    def _nearest_index(grid: np.ndarray, coords: np.ndarray) -> np.ndarray:
+        spacing = grid[1] - grid[0] if grid.size > 1 else 1.0
+        index = np.floor((coords - grid[0]) / spacing + 0.5).astype(int)
+        return np.clip(index, 0, grid.size - 1)
+
+    def fuse(self, other_values: np.ndarray) -> None:
+        """Merge a neighbour's values in place by elementwise max (Section "Cooperation")."""
+        other = np.asarray(other_values, dtype=float)
+        if other.shape != self.values.shape:
+            raise ValueError(
+                f'search density of shape {other.shape} cannot fuse with {self.values.shape}')
+        np.maximum(self.values, other, out=self.values)

@@ -1,0 +1,112 @@
+"""Range/bearing sensor with a square field of view (Eqn. sensing_model, Section Evaluation).
+
+The sensing area S_a(s) is the closed a x a square centred on the agent; p_D is p_D^max inside and
+0 outside for true targets, 1 inside for virtual targets. A detection is
+z = h(x, s) + v with h = [range, bearing] and range-dependent standard deviations.
+Bearing is atan2(y - s_y, x - s_x), the direction of the target seen from the agent (the paper's
+arctan((s_y - y)/(s_x - x)) is the same line, made unambiguous). Clutter is Poisson with mean
+lambda and uniform over the measurement space [0, r_max] x [-pi, pi), r_max the square's half
+diagonal, so kappa(z) = lambda / (2 pi r_max).
+"""
+
+import math
+
+import numpy as np
+
+from sat_agent.config import SensorParams
+
+LOG_2PI = math.log(2.0 * math.pi)
+
+
+def wrap_angle(angle):
+    """Map angles to [-pi, pi)."""
+    return (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def in_sensing_square(points: np.ndarray, pose, side: float) -> np.ndarray:
+    """Boolean mask of the (N, 2) points inside S_a(pose): max(|dx|, |dy|) <= a / 2."""
+    offset = np.abs(np.asarray(points, dtype=float) - np.asarray(pose, dtype=float))
+    return np.max(offset, axis=-1) <= side / 2.0
+
+
+def squares_intersect(pose_a, pose_b, side: float) -> bool:
+    """Whether S_a(pose_a) and S_a(pose_b) share a point (the indicator I of Eqn. ospa)."""
+    gap = np.abs(np.asarray(pose_a, dtype=float) - np.asarray(pose_b, dtype=float))
+    return bool(np.all(gap <= side))
+
+
+def detection_probability(points: np.ndarray, pose, sensor: SensorParams) -> np.ndarray:
+    """p_D(x, s) of Eqn. sensing_model for true targets at the (N, 2) points."""
+    return np.where(in_sensing_square(points, pose, sensor.square_side), sensor.p_detect, 0.0)
+
+
+def measure(points: np.ndarray, pose) -> np.ndarray:
+    """Noise-free h(x, s): (N, 2) rows of [range, bearing] of the (N, 2) points."""
+    delta = np.asarray(points, dtype=float) - np.asarray(pose, dtype=float)
+    return np.column_stack([np.hypot(delta[:, 0], delta[:, 1]),
+                            np.arctan2(delta[:, 1], delta[:, 0])])
+
+
+def measurement_sigmas(distance, sensor: SensorParams):
+    """(sigma_range, sigma_bearing) at the given distances (Section Evaluation)."""
+    d = np.asarray(distance, dtype=float)
+    return (sensor.sigma_range_0 + sensor.sigma_range_slope * d ** 2,
+            sensor.sigma_bearing_0 + sensor.sigma_bearing_slope * d)
+
+
+def log_likelihood(measurements: np.ndarray, points: np.ndarray, pose,
+                   sensor: SensorParams) -> np.ndarray:
+    """Return log g(z | x, s) for every point (rows) and measurement (columns): an (N, M) array.
+
+    g is N(z; h(x, s), diag(sigma_r^2, sigma_b^2)) with the sigmas evaluated at the point's
+    distance; bearing residuals are wrapped.
+    """
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    predicted = measure(points, pose)
+    sigma_r, sigma_b = measurement_sigmas(predicted[:, 0], sensor)
+    dr = (z[None, :, 0] - predicted[:, None, 0]) / sigma_r[:, None]
+    db = wrap_angle(z[None, :, 1] - predicted[:, None, 1]) / sigma_b[:, None]
+    log_norm = LOG_2PI + np.log(sigma_r * sigma_b)
+    return -0.5 * (dr * dr + db * db) - log_norm[:, None]
+
+
+def likelihood(measurements: np.ndarray, points: np.ndarray, pose,
+               sensor: SensorParams) -> np.ndarray:
+    """Return g(z | x, s) as an (N, M) array (see log_likelihood)."""
+    return np.exp(log_likelihood(measurements, points, pose, sensor))
+
+
+def clutter_intensity(sensor: SensorParams) -> float:
+    """kappa(z) = lambda f_c(z), f_c uniform over [0, r_max] x [-pi, pi)."""
+    return sensor.clutter_rate / (2.0 * math.pi * sensor.max_range)
+
+
+def to_position(measurements: np.ndarray, pose) -> np.ndarray:
+    """Inverse of h: the (M, 2) positions of [range, bearing] rows seen from pose."""
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    return np.asarray(pose, dtype=float) + z[:, :1] * np.column_stack(
+        [np.cos(z[:, 1]), np.sin(z[:, 1])])
+
+
+def simulate_scan(target_points: np.ndarray, pose, sensor: SensorParams,
+                  rng: np.random.Generator):
+    """Draw one measurement set Z_k: detections of the points plus Poisson clutter.
+
+    Returns (measurements (M, 2), source (M,)) where source is the index of the detected point
+    or -1 for clutter; rows are shuffled so their order carries no information.
+    """
+    points = np.asarray(target_points, dtype=float).reshape(-1, 2)
+    p_detect = detection_probability(points, pose, sensor)
+    detected = np.flatnonzero(rng.random(len(points)) < p_detect)
+    clean = measure(points[detected], pose)
+    sigma_r, sigma_b = measurement_sigmas(clean[:, 0], sensor)
+    noisy = clean + rng.standard_normal(clean.shape) * np.column_stack([sigma_r, sigma_b])
+    noisy[:, 0] = np.abs(noisy[:, 0])
+    noisy[:, 1] = wrap_angle(noisy[:, 1])
+    n_clutter = rng.poisson(sensor.clutter_rate)
+    clutter = np.column_stack([rng.uniform(0.0, sensor.max_range, n_clutter),
+                               rng.uniform(-math.pi, math.pi, n_clutter)])
+    z = np.vstack([noisy, clutter])
+    source = np.concatenate([detected, np.full(n_clutter, -1)])
+    order = rng.permutation(len(z))
+    return z[order], source[order]

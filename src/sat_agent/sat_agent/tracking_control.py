@@ -1,0 +1,68 @@
+"""Tracking control: the action whose predicted scan is most informative (Eqn. track_control).
+
+For every admissible action u (Eqn. controlVectors) the predicted ideal measurement set
+Z_{k|k-1}(u) (Eqn. pims) is the noise-free h(x, u) of each predicted target that u's square
+would detect (the Gaussian g peaks at z = h(x, u), its sigmas depend on x, not on z). A pseudo
+update of the predicted PHD with Z_{k|k-1}(u) (Eqn. satphd_correct, ``update_weights``) gives
+D_hat_k(u), and the score is the Renyi divergence between the two Poisson multi-target densities:
+
+    xi(u) = int D + alpha / (1 - alpha) int D_hat - 1 / (1 - alpha) int D_hat^alpha D^(1 - alpha),
+
+in particle form (both densities share the particles, D_hat = f D):
+    xi(u) = sum w + alpha / (1 - alpha) sum w_hat - 1 / (1 - alpha) sum w^(1 - alpha) w_hat^alpha.
+"""
+
+import numpy as np
+
+from sat_agent import actions, motion_model, sensor_model
+from sat_agent.config import SatParams, SensorParams
+from sat_agent.phd_filter import ParticlePHD, update_weights
+from sat_agent.state_extraction import MultiTargetEstimate
+
+
+def predicted_ideal_measurements(estimates: MultiTargetEstimate, pose,
+                                 sensor: SensorParams) -> np.ndarray:
+    """Eqn. pims: (M, 2) [range, bearing] of the targets inside S_a(pose), in target order."""
+    points = estimates.positions()
+    seen = sensor_model.in_sensing_square(points, pose, sensor.square_side)
+    return sensor_model.measure(points[seen], pose)
+
+
+def renyi_divergence(predicted_weights: np.ndarray, posterior_weights: np.ndarray,
+                     alpha: float) -> float:
+    """Eqn. track_control in particle form (see the module docstring).
+
+    A particle whose weight the update left unchanged contributes exactly 0 (w + a/(1-a) w -
+    w/(1-a) = 0), so only changed particles are summed: the result is exactly 0 when nothing
+    changed, and the sum costs only the particles the pseudo update touched.
+    """
+    w = np.asarray(predicted_weights, dtype=float)
+    w_hat = np.asarray(posterior_weights, dtype=float)
+    changed = w_hat != w
+    w, w_hat = w[changed], w_hat[changed]
+    overlap = np.sum(w ** (1.0 - alpha) * w_hat ** alpha)
+    return float(w.sum() + alpha / (1.0 - alpha) * w_hat.sum() - overlap / (1.0 - alpha))
+
+
+def tracking_action(predicted: ParticlePHD, estimates: MultiTargetEstimate, pose,
+                    params: SatParams):
+    """Return (action index, scores (n_actions,)) maximising Eqn. track_control.
+
+    Inadmissible actions score -inf. Ties go to the lowest index (np.argmax), so when no action
+    is informative (all scores 0) the agent stays (action 0).
+    """
+    sensor = params.sensor
+    poses = actions.candidate_poses(pose, params.actions)
+    allowed = actions.admissible_mask(pose, params.actions, params.area)
+    # Only particles some candidate square can see take part: the others keep their weight
+    # under every action and add exactly 0 to every score.
+    reach = sensor.square_side + 2.0 * float(np.max(np.abs(poses - np.asarray(pose, float))))
+    near = sensor_model.in_sensing_square(motion_model.positions(predicted.states), pose, reach)
+    states, weights = predicted.states[near], predicted.weights[near]
+    alpha = params.cooperation.renyi_alpha
+    scores = np.full(len(poses), -np.inf)
+    for action in np.flatnonzero(allowed):
+        z = predicted_ideal_measurements(estimates, poses[action], sensor)
+        posterior = update_weights(states, weights, z, poses[action], sensor)
+        scores[action] = renyi_divergence(weights, posterior, alpha)
+    return int(np.argmax(scores)), scores

@@ -1,0 +1,234 @@
+"""Scenario files: who starts where, which targets exist when, and the seed of a run.
+
+A scenario is a YAML mapping (see ``config/scenarios/paper.yaml`` and ``random.yaml``)::
+
+    name: paper            # free text, copied into metrics.json
+    seed: 1                # seed of the ground truth, the sensors and the agents
+    steps: 200             # steps k = 1 .. steps
+    truth_process_noise: 1.0e-4   # scale of the paper's Q for the true targets
+    agents:                # one entry per agent, ids unique and >= 0
+      - {id: 1, start: [10.0, 60.0]}
+    targets:               # scripted targets (optional)
+      - {id: 1, born: 104, died: 179, start: [50.0, 69.0], end: [80.0, 31.0]}
+    random_births:         # random targets (optional)
+      rate: 0.02           # expected births per step, uniform over the area
+      survival: 0.99       # per-step survival probability of a random target
+      speed_std: 0.5       # m/s, std of each velocity component of a newborn
+
+A scripted target exists on the steps ``born <= k <= died`` (the paper tracks target 1 up to
+k = 179, its death step) and starts with the constant velocity that takes it from ``start`` at
+``born`` to ``end`` at ``died``; the truth process noise makes it arrive only *near* ``end``.
+Every key is checked; unknown keys and bad values raise ScenarioError naming the key, the value
+and what is allowed.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Any, Mapping, Optional, Tuple
+
+import numpy as np
+
+
+class ScenarioError(ValueError):
+    """A scenario file or mapping with an unknown key or a value outside what is allowed."""
+
+
+@dataclass(frozen=True)
+class AgentStart:
+    """One agent of the scenario and its start position s_1."""
+
+    agent_id: int
+    start: Tuple[float, float]
+
+
+@dataclass(frozen=True)
+class ScriptedTarget:
+    """A target with fixed birth and death steps and positions."""
+
+    target_id: int
+    born: int
+    died: int
+    start: Tuple[float, float]
+    end: Tuple[float, float]
+
+    def initial_state(self) -> np.ndarray:
+        """State [x, vx, y, vy] at the birth step, velocity from start to end."""
+        duration = max(self.died - self.born, 1)
+        vx = (self.end[0] - self.start[0]) / duration
+        vy = (self.end[1] - self.start[1]) / duration
+        return np.array([self.start[0], vx, self.start[1], vy])
+
+
+@dataclass(frozen=True)
+class RandomBirths:
+    """Random targets: Poisson births anywhere in the area, geometric lifetimes."""
+
+    rate: float
+    survival: float
+    speed_std: float
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario (see the module docstring for the file format)."""
+
+    name: str
+    seed: int
+    steps: int
+    truth_process_noise: float
+    agents: Tuple[AgentStart, ...]
+    targets: Tuple[ScriptedTarget, ...] = ()
+    random_births: Optional[RandomBirths] = None
+
+    @property
+    def agent_ids(self) -> Tuple[int, ...]:
+        """Agent ids in ascending order."""
+        return tuple(sorted(a.agent_id for a in self.agents))
+
+    def with_seed(self, seed: int) -> 'Scenario':
+        """Return a copy with another seed (validated)."""
+        _integer('seed', seed, 0, 2 ** 63 - 1)
+        return Scenario(self.name, int(seed), self.steps, self.truth_process_noise,
+                        self.agents, self.targets, self.random_births)
+
+
+_TOP_KEYS = ('name', 'seed', 'steps', 'truth_process_noise', 'agents', 'targets',
+             'random_births')
+_AGENT_KEYS = ('id', 'start')
+_TARGET_KEYS = ('id', 'born', 'died', 'start', 'end')
+_BIRTH_KEYS = ('rate', 'survival', 'speed_std')
+
+
+def scenario_from_mapping(document: Any, area_width: float = 100.0,
+                          area_height: float = 100.0) -> Scenario:
+    """Validate a parsed scenario document; positions must lie in [0, width] x [0, height]."""
+    if not isinstance(document, Mapping):
+        raise ScenarioError(f'scenario = {document!r}: must be a mapping with keys {_TOP_KEYS}')
+    _known_keys('scenario', document, _TOP_KEYS)
+    for key in ('seed', 'steps', 'agents'):
+        if key not in document:
+            raise ScenarioError(f"scenario key '{key}' is missing: it is required")
+    steps = _integer('steps', document['steps'], 1, 10 ** 7)
+    area = (float(area_width), float(area_height))
+    agents = _agents(document['agents'], area)
+    targets = _targets(document.get('targets') or [], steps, area)
+    births = document.get('random_births')
+    return Scenario(
+        name=str(document.get('name', 'unnamed')),
+        seed=_integer('seed', document['seed'], 0, 2 ** 63 - 1),
+        steps=steps,
+        truth_process_noise=_number('truth_process_noise',
+                                    document.get('truth_process_noise', 0.0), 0.0, 100.0),
+        agents=agents,
+        targets=targets,
+        random_births=None if births is None else _births(births))
+
+
+def load_scenario(path, area_width: float = 100.0, area_height: float = 100.0) -> Scenario:
+    """Read and validate a scenario YAML file."""
+    import yaml
+
+    with open(path, encoding='utf-8') as stream:
+        try:
+            document = yaml.safe_load(stream)
+        except yaml.YAMLError as error:
+            raise ScenarioError(f'{path}: not valid YAML: {error}') from None
+    try:
+        return scenario_from_mapping(document, area_width, area_height)
+    except ScenarioError as error:
+        raise ScenarioError(f'{path}: {error}') from None
+
+
+def _known_keys(where: str, mapping: Mapping, allowed) -> None:
+    unknown = sorted(str(k) for k in mapping if k not in allowed)
+    if unknown:
+        raise ScenarioError(f'{where}: unknown key(s) {unknown}: allowed keys are {list(allowed)}')
+
+
+def _number(key: str, value: Any, low: float, high: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be a number")
+    if not math.isfinite(value) or not low <= value <= high:
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: allowed range is [{low}, {high}]")
+    return float(value)
+
+
+def _integer(key: str, value: Any, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be an integer")
+    if not low <= value <= high:
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: allowed range is [{low}, {high}]")
+    return int(value)
+
+
+def _point(key: str, value: Any, area) -> Tuple[float, float]:
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be a list [x, y]")
+    x = _number(f'{key}[0]', value[0], 0.0, area[0])
+    y = _number(f'{key}[1]', value[1], 0.0, area[1])
+    return (x, y)
+
+
+def _entries(key: str, value: Any) -> list:
+    if not isinstance(value, list):
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be a list of mappings")
+    for index, entry in enumerate(value):
+        if not isinstance(entry, Mapping):
+            raise ScenarioError(f"scenario key '{key}[{index}]' = {entry!r}: must be a mapping")
+    return value
+
+
+def _required(where: str, entry: Mapping, keys) -> None:
+    _known_keys(where, entry, keys)
+    for key in keys:
+        if key not in entry:
+            raise ScenarioError(f"scenario key '{where}.{key}' is missing: it is required")
+
+
+def _agents(value: Any, area) -> Tuple[AgentStart, ...]:
+    entries = _entries('agents', value)
+    if not entries:
+        raise ScenarioError("scenario key 'agents' = []: at least one agent is required")
+    agents = []
+    for index, entry in enumerate(entries):
+        where = f'agents[{index}]'
+        _required(where, entry, _AGENT_KEYS)
+        agents.append(AgentStart(_integer(f'{where}.id', entry['id'], 0, 10 ** 6),
+                                 _point(f'{where}.start', entry['start'], area)))
+    _unique_ids('agents', [a.agent_id for a in agents])
+    return tuple(agents)
+
+
+def _targets(value: Any, steps: int, area) -> Tuple[ScriptedTarget, ...]:
+    targets = []
+    for index, entry in enumerate(_entries('targets', value)):
+        where = f'targets[{index}]'
+        _required(where, entry, _TARGET_KEYS)
+        born = _integer(f'{where}.born', entry['born'], 1, steps)
+        died = _integer(f'{where}.died', entry['died'], born, 10 ** 7)
+        targets.append(ScriptedTarget(
+            target_id=_integer(f'{where}.id', entry['id'], 0, 10 ** 6), born=born, died=died,
+            start=_point(f'{where}.start', entry['start'], area),
+            end=_point(f'{where}.end', entry['end'], area)))
+    _unique_ids('targets', [t.target_id for t in targets])
+    return tuple(targets)
+
+
+def _births(value: Any) -> RandomBirths:
+    if not isinstance(value, Mapping):
+        raise ScenarioError(
+            f"scenario key 'random_births' = {value!r}: must be a mapping of {list(_BIRTH_KEYS)}")
+    _required('random_births', value, _BIRTH_KEYS)
+    return RandomBirths(rate=_number('random_births.rate', value['rate'], 0.0, 100.0),
+                        survival=_number('random_births.survival', value['survival'], 0.0, 1.0),
+                        speed_std=_number('random_births.speed_std', value['speed_std'],
+                                          0.0, 100.0))
+
+
+def _unique_ids(key: str, ids) -> None:
+    seen = set()
+    for item in ids:
+        if item in seen:
+            raise ScenarioError(
+                f"scenario key '{key}': id {item} appears twice: ids must be unique")
+        seen.add(item)

@@ -1,0 +1,31 @@
+"""ament_python package sat_world_sim: world simulator, radio, bring-up, metrics, recording."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = 'sat_world_sim'
+
+setup(
+    name=PACKAGE,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
+        (f'share/{PACKAGE}', ['package.xml']),
+        # The project's parameter and scenario files, so an installed package finds them.
+        (f'share/{PACKAGE}/config', glob('../../config/*.yaml')),
+        (f'share/{PACKAGE}/config/scenarios', glob('../../config/scenarios/*.yaml')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='sat-swarm maintainers',
+    maintainer_email='maintainers@sat-swarm.org',
+    description='World simulator, range-gated radio, bring-up and metrics of a sat-swarm run.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
+        ],
+    },
+)

@@ -1,0 +1,16 @@
+"""Test-wide isolation: a private ROS 2 domain for this run, discovery limited to this host."""
+
+import os
+from pathlib import Path
+import sys
+
+# Chosen before any rclpy import so every node and child process of this run shares it and no
+# other run on the machine sees it. Domain ids 1..100 stay clear of Fast DDS's port limits.
+os.environ.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 100))
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
+
+TESTS_DIR = Path(__file__).resolve().parent
+REPO_ROOT = TESTS_DIR.parent
+# Test helpers (msg_samples, peers) live beside the tests.
+sys.path.insert(0, str(TESTS_DIR))

@@ -1,0 +1,160 @@
+import dataclasses
+
+import numpy as np
+import pytest
+
+from sat_agent.actions import candidate_poses
+from sat_agent.agent_core import Agent
+from sat_agent.config import SatParams
+from sat_agent.mode_machine import Mode
+from sat_agent.search_map import nodes_in_view, unvisited_nodes
+from sat_agent.search_planning import joint_plan, ReplanReason
+from sat_agent.sensor_model import measure
+
+NO_MEASUREMENTS = np.zeros((0, 2))
+
+
+def small_params():
+    # Small particle budgets: these tests are about the agent's bookkeeping, not the filter.
+    return SatParams().with_overrides({
+        'phd.birth_particles_uniform': 200, 'phd.birth_particles_per_measurement': 30,
+        'phd.particles_per_target': 300, 'phd.min_particles': 200, 'phd.max_particles': 2000})
+
+
+def fly(agents, poses, steps, first_step=1, connected=False, measurements=None):
+    """Step agents alone (or exchanging reports when connected); return the last outputs."""
+    outputs = {}
+    last_reports = {}
+    for k in range(first_step, first_step + steps):
+        for agent_id, agent in agents.items():
+            inbox = [r for a, r in last_reports.items() if connected and a != agent_id]
+            z = NO_MEASUREMENTS if measurements is None else measurements(k, poses[agent_id])
+            outputs[agent_id] = agent.step(k, poses[agent_id], z, inbox)
+        for agent_id, out in outputs.items():
+            poses[agent_id] = candidate_poses(poses[agent_id],
+                                              agents[agent_id].params.actions)[out.action]
+        last_reports = {a: o.report for a, o in outputs.items()}
+    return outputs
+
+
+def test_two_agents_coming_into_range_fuse_densities_and_compute_the_same_joint_plan():
+    params = small_params()
+    poses = {1: np.array([10.0, 50.0]), 2: np.array([90.0, 50.0])}
+    agents = {a: Agent(a, params, poses[a], seed=5) for a in poses}
+    alone = fly(agents, poses, 6)
+    assert all(o.replan == ReplanReason.NONE for o in alone.values())
+    reports = {a: o.report for a, o in alone.items()}
+    # Step 7: the radio delivers each agent the other's report of step 6.
+    out = {a: agents[a].step(7, poses[a], NO_MEASUREMENTS, [reports[3 - a]]) for a in agents}
+    assert out[1].replan == out[2].replan == ReplanReason.NEW_NEIGHBOUR
+    # Each density now holds the other's searched cells (elementwise max).
+    for a in agents:
+        assert np.all(out[a].report.search_values >= reports[3 - a].search_values * 0.999)
+        assert np.all(out[a].report.search_values >= reports[a].search_values * 0.999)
+    # The partition each computed alone is the joint plan of the two step-6 reports.
+    fused = np.maximum(reports[1].search_values, reports[2].search_values)
+    node_values = agents[1].search_map_values(fused)
+    nodes = unvisited_nodes(node_values, params.search.unvisited_threshold)
+    expected = joint_plan({a: reports[a].pose for a in agents}, agents[1].search_map.centers,
+                          nodes)
+    walks = {a: list(agents[a].planner.walk) for a in agents}
+    assert not set(walks[1]) & set(walks[2])
+    for a in agents:
+        # The own walk is the expected one minus the nodes already in view at s_7.
+        in_view = set(nodes_in_view(agents[a].search_map, poses[a], 10.0).tolist())
+        assert walks[a] == [n for n in expected[a] if n not in in_view]
+        assert len(expected[a]) > 30
+    assert set(expected[1]) | set(expected[2]) == set(nodes.tolist())
+
+
+def test_a_neighbour_leaving_search_releases_its_nodes():
+    params = small_params()
+    poses = {1: np.array([40.0, 50.0]), 2: np.array([60.0, 50.0])}
+    agents = {a: Agent(a, params, poses[a], seed=2) for a in poses}
+    out = fly(agents, poses, 3, connected=True)
+    assert agents[1].planner.group == {1, 2}
+    before = set(agents[1].planner.walk)
+    tracking = dataclasses.replace(out[2].report, mode=Mode.TRACK)
+    released = agents[1].step(4, poses[1], NO_MEASUREMENTS, [tracking])
+    assert released.replan == ReplanReason.RELEASED
+    after = set(agents[1].planner.walk)
+    assert agents[1].planner.group == {1}
+    assert after - before, 'agent 1 must take over nodes of agent 2'
+    assert len(after) > len(before) + 20
+
+
+def test_stale_foreign_and_malformed_reports_are_dropped():
+    params = small_params()
+    agent = Agent(1, params, (50.0, 50.0), seed=1)
+    other = Agent(2, params, (60.0, 50.0), seed=1)
+    report = other.step(1, (60.0, 50.0), NO_MEASUREMENTS, []).report
+    agent.step(1, (50.0, 50.0), NO_MEASUREMENTS, [])
+    stale = dataclasses.replace(report, step=0)
+    bad_shape = dataclasses.replace(report, search_values=np.zeros((3, 3)))
+    nan_pose = dataclasses.replace(report, pose=np.array([np.nan, 1.0]))
+    own = dataclasses.replace(report, agent_id=1)
+    out = agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [stale, bad_shape, nan_pose, own, report,
+                                                        report])
+    assert agent.dropped_reports == 5
+    assert out.replan == ReplanReason.NEW_NEIGHBOUR
+
+
+def target_measurements(target, rng):
+    def measurements(k, pose):
+        z = measure(np.array([target(k)]), pose)
+        return z + rng.normal(0.0, [0.5, 0.01], z.shape) if np.max(
+            np.abs(target(k) - pose)) <= 5.0 else NO_MEASUREMENTS
+    return measurements
+
+
+def test_agent_detects_a_target_in_view_tracks_it_and_follows_it():
+    params = small_params()
+    pose = np.array([50.0, 50.0])
+    agent = Agent(1, params, pose, seed=3)
+    target = (lambda k: np.array([52.0 + 0.8 * k, 51.0]))
+    measurements = target_measurements(target, np.random.default_rng(0))
+    modes = []
+    for k in range(1, 31):
+        out = agent.step(k, pose, measurements(k, pose), [])
+        modes.append(out.mode)
+        # The world holds the agent for two steps, long enough to confirm the target.
+        if k > 2:
+            pose = candidate_poses(pose, params.actions)[out.action]
+    assert modes[:2] == [Mode.SEARCH, Mode.SEARCH]
+    assert modes[2:] == [Mode.TRACK] * 28
+    assert np.max(np.abs(pose - target(31))) <= 5.0, 'the agent keeps the target in view'
+    (estimate,) = out.estimate.targets
+    assert np.linalg.norm(estimate.position - target(30)) < 2.0
+    assert len(out.plan) == 0
+
+
+def test_same_seed_same_outputs():
+    params = small_params()
+    target = (lambda k: np.array([48.0 + 0.5 * k, 49.0]))
+
+    def run(seed):
+        poses = {1: np.array([50.0, 50.0])}
+        agent = Agent(1, params, poses[1], seed=seed)
+        trace = []
+        for k in range(1, 13):
+            out = fly({1: agent}, poses, 1, first_step=k,
+                      measurements=target_measurements(target, np.random.default_rng(k)))
+            trace.append((out[1].action, out[1].mode,
+                          [t.position.tolist() for t in out[1].estimate.targets],
+                          agent.filter.targets.weights.sum()))
+        return trace
+
+    assert run(11) == run(11)
+    assert run(11) != run(12)
+
+
+@pytest.mark.parametrize('pose', [(0.0, 0.0), (100.0, 37.0)])
+def test_actions_are_admissible_at_the_border(pose):
+    params = small_params()
+    poses = {1: np.array(pose)}
+    agent = Agent(1, params, poses[1], seed=0)
+    for k in range(1, 6):
+        out = agent.step(k, poses[1], NO_MEASUREMENTS, [])
+        nxt = candidate_poses(poses[1], params.actions)[out.action]
+        assert 0.0 <= nxt[0] <= 100.0 and 0.0 <= nxt[1] <= 100.0
+        poses[1] = nxt

@@ -1,0 +1,70 @@
+import pytest
+
+from sat_agent.config import SatParams
+from sat_agent.mode_machine import Mode, ModeMachine
+
+PARAMS = SatParams()     # track_timeout 5, overlap_window 5
+
+
+def tracking_machine(**kwargs):
+    machine = ModeMachine(PARAMS, **kwargs)
+    assert machine.update(1, False) == Mode.TRACK
+    return machine
+
+
+def test_mode_values_are_the_message_constants():
+    assert (int(Mode.SEARCH), int(Mode.TRACK)) == (0, 1)
+
+
+def test_search_until_a_target_is_estimated():
+    machine = ModeMachine(PARAMS)
+    assert machine.mode == Mode.SEARCH and not machine.switched
+    assert machine.update(0, False) == Mode.SEARCH and not machine.switched
+    assert machine.update(2, False) == Mode.TRACK and machine.switched
+    assert machine.update(2, False) == Mode.TRACK and not machine.switched
+
+
+def test_track_falls_back_to_search_after_the_timeout_without_targets():
+    machine = tracking_machine()
+    for _ in range(PARAMS.cooperation.track_timeout - 1):
+        assert machine.update(0, False) == Mode.TRACK
+    assert machine.update(0, False) == Mode.SEARCH and machine.switched
+    # No cooldown after a timeout: a new target is tracked at once.
+    assert machine.update(1, False) == Mode.TRACK
+
+
+def test_a_target_seen_again_resets_the_timeout():
+    machine = tracking_machine()
+    for _ in range(PARAMS.cooperation.track_timeout - 1):
+        machine.update(0, False)
+    machine.update(1, False)
+    for _ in range(PARAMS.cooperation.track_timeout - 1):
+        assert machine.update(0, False) == Mode.TRACK
+    assert machine.update(0, False) == Mode.SEARCH
+
+
+def test_overlap_leaver_searches_at_once_and_ignores_targets_during_the_cooldown():
+    machine = tracking_machine()
+    assert machine.update(1, True) == Mode.SEARCH and machine.switched
+    cooldown = PARAMS.cooperation.overlap_window + PARAMS.cooperation.track_timeout
+    assert machine.cooldown_left == cooldown == 10
+    for _ in range(cooldown):
+        assert machine.update(1, False) == Mode.SEARCH and not machine.switched
+    assert machine.update(1, False) == Mode.TRACK and machine.switched
+
+
+def test_cooldown_can_be_set_and_leave_is_ignored_in_search():
+    machine = tracking_machine(rejoin_cooldown=0)
+    machine.update(1, True)
+    assert machine.update(1, False) == Mode.TRACK
+    searching = ModeMachine(PARAMS, rejoin_cooldown=3)
+    assert searching.update(0, True) == Mode.SEARCH and searching.cooldown_left == 0
+
+
+def test_refuses_bad_counts_and_cooldowns():
+    with pytest.raises(ValueError):
+        ModeMachine(PARAMS).update(-1, False)
+    with pytest.raises(ValueError):
+        ModeMachine(PARAMS).update(1.5, False)
+    with pytest.raises(ValueError):
+        ModeMachine(PARAMS, rejoin_cooldown=-2)
