@@ -38,7 +38,7 @@ def _scalar(type_name: str, rng: random.Random):
     if type_name in ('float', 'float32'):
         return rng.randrange(-4096, 4096) / 8.0
     if type_name == 'boolean':
-        return rng.random() < 0.5
+        return True     # the non-default value
     if type_name == 'string':
         return f's{rng.randrange(10 ** 6)}'
     if type_name in INTEGER_BITS:

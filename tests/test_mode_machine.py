@@ -1,13 +1,13 @@
 import pytest
 
-from sat_agent.config import SatParams
+from sat_agent.config import ParameterError, SatParams
 from sat_agent.mode_machine import Mode, ModeMachine
 
 PARAMS = SatParams()     # track_timeout 5, overlap_window 5
 
 
-def tracking_machine(**kwargs):
-    machine = ModeMachine(PARAMS, **kwargs)
+def tracking_machine(params=PARAMS):
+    machine = ModeMachine(params)
     assert machine.update(1, False) == Mode.TRACK
     return machine
 
@@ -46,7 +46,7 @@ def test_a_target_seen_again_resets_the_timeout():
 def test_overlap_leaver_searches_at_once_and_ignores_targets_during_the_cooldown():
     machine = tracking_machine()
     assert machine.update(1, True) == Mode.SEARCH and machine.switched
-    cooldown = PARAMS.cooperation.overlap_window + PARAMS.cooperation.track_timeout
+    cooldown = PARAMS.cooperation.rejoin_cooldown
     assert machine.cooldown_left == cooldown == 10
     for _ in range(cooldown):
         assert machine.update(1, False) == Mode.SEARCH and not machine.switched
@@ -54,10 +54,10 @@ def test_overlap_leaver_searches_at_once_and_ignores_targets_during_the_cooldown
 
 
 def test_cooldown_can_be_set_and_leave_is_ignored_in_search():
-    machine = tracking_machine(rejoin_cooldown=0)
+    machine = tracking_machine(PARAMS.with_overrides({'cooperation.rejoin_cooldown': 0}))
     machine.update(1, True)
     assert machine.update(1, False) == Mode.TRACK
-    searching = ModeMachine(PARAMS, rejoin_cooldown=3)
+    searching = ModeMachine(PARAMS.with_overrides({'cooperation.rejoin_cooldown': 3}))
     assert searching.update(0, True) == Mode.SEARCH and searching.cooldown_left == 0
 
 
@@ -66,5 +66,5 @@ def test_refuses_bad_counts_and_cooldowns():
         ModeMachine(PARAMS).update(-1, False)
     with pytest.raises(ValueError):
         ModeMachine(PARAMS).update(1.5, False)
-    with pytest.raises(ValueError):
-        ModeMachine(PARAMS, rejoin_cooldown=-2)
+    with pytest.raises(ParameterError, match='cooperation.rejoin_cooldown'):
+        PARAMS.with_overrides({'cooperation.rejoin_cooldown': -2})

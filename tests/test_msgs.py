@@ -18,7 +18,7 @@ LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 EXPECTED_TYPES = {'AgentMode', 'AgentStatus', 'AgentTruth', 'ControlCommand', 'GridInfo',
                   'GroundTruth', 'MeasurementSet', 'MultiTargetEstimate', 'RangeBearing',
-                  'SearchDensity', 'TargetEstimate', 'TargetTruth', 'WorldStep'}
+                  'RadioTraffic', 'SearchDensity', 'TargetEstimate', 'TargetTruth', 'WorldStep'}
 
 
 def test_every_designed_type_is_built():

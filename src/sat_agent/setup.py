@@ -21,6 +21,7 @@ setup(
     entry_points={
         'console_scripts': [
             'agent = sat_agent.agent_node:main',
+            'agents_composed = sat_agent.agent_node:main_composed',
         ],
     },
 )

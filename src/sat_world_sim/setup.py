@@ -26,6 +26,9 @@ setup(
     entry_points={
         'console_scripts': [
             'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
+            'metrics = sat_world_sim.metrics_node:main',
+            'swarm = sat_world_sim.bringup:main',
+            'world_sim = sat_world_sim.world_sim_node:main',
         ],
     },
 )

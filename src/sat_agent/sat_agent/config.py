@@ -184,6 +184,10 @@ class CooperationParams:
     overlap_threshold: float = 10.0
     # TRACK falls back to SEARCH after this many consecutive steps with no estimated target.
     track_timeout: int = 5
+    # After leaving TRACK because of an overlap, ignore estimated targets for this many steps
+    # (up to 4 m/step of flight, far beyond the a/2 + extraction margin = 10 m it takes to get
+    # the abandoned targets out of view).
+    rejoin_cooldown: int = 10
 
     def validate(self, prefix='cooperation'):
         _check(f'{prefix}.comm_range', self.comm_range, 0, INF)
@@ -192,6 +196,7 @@ class CooperationParams:
         _check(f'{prefix}.overlap_window', self.overlap_window, 1, 10000)
         _check(f'{prefix}.overlap_threshold', self.overlap_threshold, 0, INF)
         _check(f'{prefix}.track_timeout', self.track_timeout, 1, 10000)
+        _check(f'{prefix}.rejoin_cooldown', self.rejoin_cooldown, 0, 10000)
 
 
 @dataclass(frozen=True)

@@ -7,11 +7,11 @@ the tracking-overlap test makes it the leaver.
 
 After leaving because of an overlap the agent still sees the abandoned targets for a few steps
 while it flies off; re-entering TRACK then would undo the overlap resolution. So it ignores
-estimated targets (stays in SEARCH) for ``rejoin_cooldown`` steps. The mode machine only sees
-target counts, so the cooldown is on time, not on target identity: by default
-overlap_window + track_timeout steps (10 with the defaults), during which the agent can fly up to
-N_R * Delta_R = 4 m per step, far more than the a / 2 + extraction margin = 10 m it takes to get
-the abandoned targets out of its extraction region.
+estimated targets (stays in SEARCH) for ``cooperation.rejoin_cooldown`` steps. The mode machine
+only sees target counts, so the cooldown is on time, not on target identity: 10 steps by default,
+during which the agent can fly up to N_R * Delta_R = 4 m per step, far more than the
+a / 2 + extraction margin = 10 m it takes to get the abandoned targets out of its extraction
+region.
 """
 
 import enum
@@ -29,14 +29,9 @@ class Mode(enum.IntEnum):
 class ModeMachine:
     """The agent's mode and its transitions (module docstring); starts in SEARCH."""
 
-    def __init__(self, params: SatParams, rejoin_cooldown=None):
-        cooperation = params.cooperation
-        self._timeout = int(cooperation.track_timeout)
-        if rejoin_cooldown is None:
-            rejoin_cooldown = cooperation.overlap_window + cooperation.track_timeout
-        if int(rejoin_cooldown) != rejoin_cooldown or rejoin_cooldown < 0:
-            raise ValueError(f'rejoin_cooldown = {rejoin_cooldown!r}: must be an integer >= 0')
-        self._cooldown = int(rejoin_cooldown)
+    def __init__(self, params: SatParams):
+        self._timeout = int(params.cooperation.track_timeout)
+        self._cooldown = int(params.cooperation.rejoin_cooldown)
         self.mode = Mode.SEARCH
         self.switched = False
         self._steps_without_targets = 0

@@ -1,0 +1,194 @@
+"""The agent node: a thin rclpy adapter over sat_agent.agent_core.Agent.
+
+Run one per agent in its own namespace::
+
+    ros2 run sat_agent agent --ros-args -r __ns:=/agent_3 -p agent_id:=3 \
+        --params-file config/paper.yaml
+
+Topics (relative, so under the namespace) and their QoS:
+
+- ``measurements`` (sub, MeasurementSet): reliable, keep last 10. One scan per step; losing one
+  would stall a lock-step run.
+- ``radio/in/{search_density,estimate,mode}`` (sub): reliable, keep last 100; the radio forwards
+  several senders' reports in a burst.
+- ``cmd`` (pub, ControlCommand), ``radio/out/*`` (pub): reliable, keep last 10 / 100.
+- ``status`` (pub, AgentStatus): reliable, keep last 10, for the logger and the recorder.
+
+Lock-step: a scan says how many radio messages were forwarded to this agent for its step
+(``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
+seconds with what it has (a lost message must not stall it). Invalid input is dropped with a
+rate-limited warning and counted per reason.
+"""
+
+import argparse
+from collections import Counter
+import sys
+import time
+
+import numpy as np
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.utilities import remove_ros_args
+
+from sat_agent.actions import candidate_poses
+from sat_agent.agent_core import Agent
+from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
+                                       point, report_from_msgs, report_to_msgs)
+from sat_agent.node_runner import run_nodes
+from sat_agent.ros_params import declare_required_int, declare_sat_params
+from sat_msgs.msg import (AgentMode, AgentStatus, ControlCommand, MeasurementSet,
+                          MultiTargetEstimate, SearchDensity)
+
+RADIO_KINDS = (('search_density', SearchDensity), ('estimate', MultiTargetEstimate),
+               ('mode', AgentMode))
+STEP_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+RADIO_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+# Particles shown to the logger per step: enough to see the cloud, small on the wire.
+STATUS_PARTICLES = 300
+LOG_THROTTLE_S = 5.0
+
+
+class AgentNode(Node):
+    """Validates input, steps the core Agent, publishes its command, reports and status."""
+
+    def __init__(self, **kwargs):
+        super().__init__('agent', **kwargs)
+        self.params = declare_sat_params(self)
+        self.agent_id = declare_required_int(self, 'agent_id', 1, 'this agent id (>= 1)')
+        self.seed = self.declare_parameter('seed', 0).value
+        self.report_wait_timeout = float(self.declare_parameter('report_wait_timeout', 2.0).value)
+        self.core = None
+        self.last_step = 0
+        self.dropped = Counter()
+        self._pending = None          # (MeasurementSet, time it arrived)
+        self._radio = {}              # (sender, step) -> {kind: msg}
+        self._received_since_step = 0
+
+        self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP_QOS)
+        self.status_pub = self.create_publisher(AgentStatus, 'status', STEP_QOS)
+        self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO_QOS)
+                           for kind, cls in RADIO_KINDS}
+        self.create_subscription(MeasurementSet, 'measurements', self.on_measurements, STEP_QOS)
+        for kind, cls in RADIO_KINDS:
+            self.create_subscription(cls, f'radio/in/{kind}',
+                                     lambda msg, kind=kind: self.on_radio(kind, msg), RADIO_QOS)
+        self.create_timer(0.05, self._check_wait_timeout)
+        self.get_logger().info(f'agent {self.agent_id} ready')
+
+    # -- input ------------------------------------------------------------------------------
+
+    def _drop(self, reason: str, detail: str):
+        self.dropped[reason] += 1
+        self.get_logger().warning(f'dropped message ({reason}): {detail}',
+                                  throttle_duration_sec=LOG_THROTTLE_S)
+
+    def on_measurements(self, msg: MeasurementSet):
+        if msg.agent_id != self.agent_id:
+            self._drop('wrong_agent_id', f'scan for agent {msg.agent_id}')
+            return
+        if msg.step <= self.last_step:
+            self._drop('stale_step', f'scan of step {msg.step} after step {self.last_step}')
+            return
+        if self._pending is not None:
+            # The world moved on without our command (we were too slow): step the newest scan.
+            self._drop('superseded_scan', f'scan of step {self._pending[0].step} never stepped')
+        self._pending = (msg, time.monotonic())
+        self._try_step()
+
+    def on_radio(self, kind: str, msg):
+        self._received_since_step += 1
+        if msg.agent_id == self.agent_id or msg.agent_id == 0:
+            self._drop('unknown_sender', f'{kind} from agent {msg.agent_id}')
+        elif msg.step < self.last_step - 1:
+            self._drop('stale_step', f'{kind} of step {msg.step} at step {self.last_step}')
+        else:
+            self._radio.setdefault((msg.agent_id, msg.step), {})[kind] = msg
+        self._try_step()
+
+    def _check_wait_timeout(self):
+        if self._pending and time.monotonic() - self._pending[1] > self.report_wait_timeout:
+            self.get_logger().warning(
+                f'step {self._pending[0].step}: radio messages missing after '
+                f'{self.report_wait_timeout} s, stepping without them',
+                throttle_duration_sec=LOG_THROTTLE_S)
+            self._step(self._pending[0])
+
+    def _try_step(self):
+        if self._pending and self._received_since_step >= self._pending[0].radio_deliveries:
+            self._step(self._pending[0])
+
+    def _inbox(self, step: int):
+        """Complete reports (all three kinds) of step k-1; older or partial ones are dropped."""
+        reports = []
+        for (sender, sent), parts in sorted(self._radio.items()):
+            if sent != step - 1:
+                continue
+            if len(parts) < len(RADIO_KINDS):
+                self._drop('partial_report', f'agent {sender} step {sent}: only {sorted(parts)}')
+                continue
+            try:
+                reports.append(report_from_msgs(parts['search_density'], parts['estimate'],
+                                                parts['mode'], self.core.filter.search.lattice))
+            except InvalidMessage as error:
+                self._drop(error.reason, f'report of agent {sender}: {error.detail}')
+        self._radio = {key: parts for key, parts in self._radio.items() if key[1] >= step}
+        return reports
+
+    # -- one step ---------------------------------------------------------------------------
+
+    def _step(self, msg: MeasurementSet):
+        self._pending = None
+        self._received_since_step = 0
+        try:
+            pose, measurements = measurements_from_msg(msg)
+        except InvalidMessage as error:
+            self._drop(error.reason, f'scan of step {msg.step}: {error.detail}')
+            return
+        started = time.perf_counter()
+        if self.core is None:
+            # (Re)started agents build their core at the first scan they get.
+            self.core = Agent(self.agent_id, self.params, pose, seed=self.seed)
+        output = self.core.step(msg.step, pose, measurements, self._inbox(msg.step))
+        self.last_step = msg.step
+        for kind, out in zip(('search_density', 'estimate', 'mode'),
+                             report_to_msgs(output.report, self.core.filter.search.lattice)):
+            self.radio_pubs[kind].publish(out)
+        self.status_pub.publish(self._status(msg.step, pose, output,
+                                             time.perf_counter() - started))
+        target = candidate_poses(pose, self.params.actions)[output.action]
+        self.cmd_pub.publish(ControlCommand(agent_id=self.agent_id, step=msg.step,
+                                            action_index=output.action,
+                                            target_position=point(target)))
+
+    def _status(self, step: int, pose, output, compute_time: float) -> AgentStatus:
+        targets = self.core.filter.targets
+        keep = np.linspace(0, len(targets.weights) - 1,
+                           min(STATUS_PARTICLES, len(targets.weights))).astype(int)
+        return AgentStatus(
+            agent_id=self.agent_id, step=step, mode=int(output.mode), position=point(pose),
+            plan=[point(p) for p in output.plan], group=sorted(self.core.planner.group),
+            estimate=estimate_to_msg(self.agent_id, step, pose, output.estimate),
+            particle_xy=targets.states[keep][:, (0, 2)].astype(np.float32).ravel(),
+            particle_weights=targets.weights[keep].astype(np.float32),
+            compute_time=compute_time)
+
+
+def main(args=None):
+    return run_nodes('agent', AgentNode, args)
+
+
+def main_composed(args=None):
+    """Many agents in one process and one executor: ``agents_composed --ids 1 2 ... --ros-args``.
+
+    For large swarms: each agent is the same AgentNode in its own namespace ``/agent_<i>``, so
+    the graph is the one of separate processes, without one Python interpreter per agent.
+    """
+    argv = remove_ros_args(args if args is not None else sys.argv)
+    parser = argparse.ArgumentParser(prog='agents_composed', description=main_composed.__doc__)
+    parser.add_argument('--ids', type=int, nargs='+', required=True, help='agent ids (>= 1)')
+    ids = parser.parse_args(argv[1:]).ids
+    return run_nodes('agents_composed', lambda: [
+        AgentNode(namespace=f'/agent_{i}',
+                  parameter_overrides=[Parameter('agent_id', Parameter.Type.INTEGER, i)])
+        for i in ids], args)

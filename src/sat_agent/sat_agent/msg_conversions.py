@@ -1,0 +1,170 @@
+"""Between sat_msgs messages and the core's dataclasses, validating everything that comes in.
+
+Incoming messages are checked before the core sees them: finite numbers, lengths that match,
+grid geometry equal to this agent's lattice, sane counts. A bad message raises InvalidMessage
+with a short reason (a counter key) and a detail for the log line.
+"""
+
+from geometry_msgs.msg import Point, Vector3
+import numpy as np
+
+from sat_agent.agent_core import AgentReport
+from sat_agent.mode_machine import Mode
+from sat_agent.search_density import Lattice
+from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
+from sat_msgs.msg import (AgentMode, GridInfo, MeasurementSet, MultiTargetEstimate as EstimateMsg,
+                          RangeBearing, SearchDensity, TargetEstimate as TargetMsg)
+
+# Far more than a square of side a can hold (lambda = 10 clutter + targets); guards memory.
+MAX_DETECTIONS = 10000
+MAX_TARGETS = 1000
+
+
+class InvalidMessage(ValueError):
+    """An incoming message the node must drop; ``reason`` names the counter it increments."""
+
+    def __init__(self, reason: str, detail: str):
+        super().__init__(f'{reason}: {detail}')
+        self.reason = reason
+        self.detail = detail
+
+
+def _finite(reason: str, values, what: str) -> np.ndarray:
+    array = np.asarray(values, dtype=float)
+    if not np.all(np.isfinite(array)):
+        raise InvalidMessage(reason, f'{what} has NaN or inf')
+    return array
+
+
+def point(xy) -> Point:
+    """Return a geometry_msgs/Point at (x, y, 0)."""
+    return Point(x=float(xy[0]), y=float(xy[1]), z=0.0)
+
+
+def xy(p: Point) -> np.ndarray:
+    """Return the (2,) array of a Point's x and y."""
+    return np.array([p.x, p.y], dtype=float)
+
+
+# -- measurements ---------------------------------------------------------------------------
+
+def measurements_to_msg(agent_id: int, step: int, pose, measurements, deliveries: int = 0):
+    """Build the MeasurementSet world_sim sends (measurements: (M, 2) range, bearing)."""
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    return MeasurementSet(
+        agent_id=int(agent_id), step=int(step), agent_position=point(pose),
+        detections=[RangeBearing(range=float(r), bearing=float(b)) for r, b in z],
+        radio_deliveries=int(deliveries))
+
+
+def measurements_from_msg(msg: MeasurementSet):
+    """Return (pose (2,), measurements (M, 2)) of a validated MeasurementSet."""
+    if len(msg.detections) > MAX_DETECTIONS:
+        raise InvalidMessage('too_many_detections',
+                             f'{len(msg.detections)} detections (at most {MAX_DETECTIONS})')
+    pose = _finite('non_finite', xy(msg.agent_position), 'agent_position')
+    z = _finite('non_finite', [(d.range, d.bearing) for d in msg.detections],
+                'detections').reshape(-1, 2)
+    if np.any(z[:, 0] < 0) or np.any(np.abs(z[:, 1]) > np.pi + 1e-9):
+        raise InvalidMessage('out_of_range', 'range < 0 or |bearing| > pi')
+    return pose, z
+
+
+# -- estimates ------------------------------------------------------------------------------
+
+def estimate_to_msg(agent_id: int, step: int, pose, estimate: MultiTargetEstimate) -> EstimateMsg:
+    """Build a MultiTargetEstimate message."""
+    targets = [TargetMsg(position=point(t.position),
+                         velocity=Vector3(x=float(t.velocity[0]), y=float(t.velocity[1]), z=0.0),
+                         covariance=np.asarray(t.covariance, dtype=float).ravel().tolist(),
+                         weight=float(t.weight))
+               for t in estimate.targets]
+    return EstimateMsg(agent_id=int(agent_id), step=int(step), agent_position=point(pose),
+                       targets=targets, cardinality=float(estimate.cardinality))
+
+
+def estimate_from_msg(msg: EstimateMsg) -> MultiTargetEstimate:
+    """Return the core's MultiTargetEstimate of a validated message."""
+    if len(msg.targets) > MAX_TARGETS:
+        raise InvalidMessage('too_many_targets',
+                             f'{len(msg.targets)} targets (at most {MAX_TARGETS})')
+    targets = []
+    for t in msg.targets:
+        covariance = _finite('non_finite', t.covariance, 'covariance').reshape(4, 4)
+        targets.append(TargetEstimate(
+            position=_finite('non_finite', xy(t.position), 'target position'),
+            velocity=_finite('non_finite', [t.velocity.x, t.velocity.y], 'target velocity'),
+            covariance=covariance,
+            weight=float(_finite('non_finite', t.weight, 'target weight'))))
+    cardinality = float(_finite('non_finite', msg.cardinality, 'cardinality'))
+    if cardinality < 0:
+        raise InvalidMessage('out_of_range', f'cardinality {cardinality} < 0')
+    return MultiTargetEstimate(targets=tuple(targets), cardinality=cardinality)
+
+
+# -- search density -------------------------------------------------------------------------
+
+def grid_info(lattice: Lattice) -> GridInfo:
+    """Describe the shared lattice (origin at the area's corner)."""
+    return GridInfo(origin_x=0.0, origin_y=0.0, resolution=float(lattice.spacing),
+                    width=int(lattice.nx), height=int(lattice.ny))
+
+
+def density_to_msg(agent_id: int, step: int, values: np.ndarray,
+                   lattice: Lattice) -> SearchDensity:
+    """Build a SearchDensity message (values row-major, float32 on the wire)."""
+    return SearchDensity(agent_id=int(agent_id), step=int(step), grid=grid_info(lattice),
+                         values=np.asarray(values, dtype=np.float32).ravel())
+
+
+def density_from_msg(msg: SearchDensity, lattice: Lattice) -> np.ndarray:
+    """Return the (ny, nx) values of a validated SearchDensity on this agent's lattice."""
+    expected = grid_info(lattice)
+    if (msg.grid.width, msg.grid.height) != (expected.width, expected.height) or \
+            (msg.grid.origin_x, msg.grid.origin_y, msg.grid.resolution) != \
+            (expected.origin_x, expected.origin_y, expected.resolution):
+        raise InvalidMessage('grid_mismatch', f'grid {msg.grid} differs from {expected}')
+    values = np.asarray(msg.values, dtype=np.float32)
+    if values.size != lattice.nx * lattice.ny:
+        raise InvalidMessage('wrong_length',
+                             f'{values.size} values for a {lattice.ny} x {lattice.nx} grid')
+    if not np.all(np.isfinite(values)) or values.min() < 0 or values.max() > 1:
+        raise InvalidMessage('out_of_range', 'search density values outside [0, 1]')
+    return values.reshape(lattice.ny, lattice.nx)
+
+
+# -- mode -----------------------------------------------------------------------------------
+
+def mode_to_msg(agent_id: int, step: int, pose, mode: Mode) -> AgentMode:
+    """Build an AgentMode message."""
+    return AgentMode(agent_id=int(agent_id), step=int(step), mode=int(mode), position=point(pose))
+
+
+def mode_from_msg(msg: AgentMode) -> Mode:
+    """Return the Mode of a validated AgentMode."""
+    try:
+        return Mode(msg.mode)
+    except ValueError:
+        raise InvalidMessage('unknown_mode', f'mode {msg.mode}') from None
+
+
+# -- whole reports --------------------------------------------------------------------------
+
+def report_to_msgs(report: AgentReport, lattice: Lattice):
+    """Split a core AgentReport into the three radio messages (density, estimate, mode)."""
+    return (density_to_msg(report.agent_id, report.step, report.search_values, lattice),
+            estimate_to_msg(report.agent_id, report.step, report.pose, report.estimate),
+            mode_to_msg(report.agent_id, report.step, report.pose, report.mode))
+
+
+def report_from_msgs(density: SearchDensity, estimate: EstimateMsg, mode: AgentMode,
+                     lattice: Lattice) -> AgentReport:
+    """Join the three radio messages of one sender and step into an AgentReport."""
+    ids = {density.agent_id, estimate.agent_id, mode.agent_id}
+    steps = {density.step, estimate.step, mode.step}
+    if len(ids) != 1 or len(steps) != 1:
+        raise InvalidMessage('inconsistent_report', f'agent ids {ids}, steps {steps}')
+    pose = _finite('non_finite', xy(mode.position), 'position')
+    return AgentReport(agent_id=int(mode.agent_id), step=int(mode.step), pose=pose,
+                       mode=mode_from_msg(mode), search_values=density_from_msg(density, lattice),
+                       estimate=estimate_from_msg(estimate))

@@ -1,0 +1,285 @@
+"""The world_sim node: ground truth, sensors and the radio of a run, as a thin adapter.
+
+The maths is in world_model.World (truth, scans, moves, coverage) and radio.Radio (range gate,
+loss, delay, counters); this node moves messages:
+
+- publishes ``/world/step`` (WorldStep), ``/world/truth`` (GroundTruth), ``/world/radio``
+  (RadioTraffic) and each agent's ``/agent_<i>/measurements`` (MeasurementSet);
+- takes ``/agent_<i>/cmd`` (ControlCommand) and ``/agent_<i>/radio/out/<kind>``, forwarding the
+  latter to ``/agent_<j>/radio/in/<kind>`` for the agents j in range (the only path between
+  agents).
+
+Clocks (parameter ``clock``):
+
+- ``lock_step``: step k+1 starts as soon as every active agent has sent its command and its
+  three reports for step k. Deterministic for a seed, as fast as the CPUs allow.
+- ``real_time``: a step every ``period`` seconds; agents that are late hold position.
+
+An agent that stays silent for ``agent_timeout`` seconds (lock-step) is marked inactive: it holds
+position and is not waited for until it speaks again. Commands that are not one of the actions
+of Eqn. controlVectors or leave the area are refused with a log line; the agent holds.
+When the run is over the node publishes a final WorldStep with ``finished`` and exits.
+"""
+
+from collections import Counter
+from pathlib import Path
+import time
+
+from ament_index_python.packages import get_package_share_directory
+from geometry_msgs.msg import Vector3
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
+
+from sat_agent.msg_conversions import measurements_to_msg, point
+from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.ros_params import declare_sat_params
+from sat_msgs.msg import (AgentMode, AgentTruth, ControlCommand, GroundTruth, MeasurementSet,
+                          MultiTargetEstimate, RadioTraffic, SearchDensity, TargetTruth,
+                          WorldStep)
+
+from sat_world_sim.radio import Radio
+from sat_world_sim.scenario import load_scenario
+from sat_world_sim.world_model import World
+
+RADIO_KINDS = (('search_density', SearchDensity), ('estimate', MultiTargetEstimate),
+               ('mode', AgentMode))
+STEP_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+RADIO_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+# /world/* are kept for late joiners (a logger started after the world) and read by every
+# observer; depth covers a few steps of slow subscribers.
+WORLD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE,
+                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
+CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
+LOG_THROTTLE_S = 5.0
+DISCOVERY_SETTLE_S = 0.5
+
+
+def default_scenario() -> str:
+    """Return the path of the installed paper scenario."""
+    return str(Path(get_package_share_directory('sat_world_sim')) / 'config' / 'scenarios'
+               / 'paper.yaml')
+
+
+class WorldSimNode(Node):
+    """Runs one scenario (module docstring)."""
+
+    def __init__(self, **kwargs):
+        super().__init__('world_sim', **kwargs)
+        self.params = declare_sat_params(self)
+        scenario_path = self.declare_parameter('scenario', '').value or default_scenario()
+        scenario = load_scenario(scenario_path, self.params.area.width, self.params.area.height)
+        seed = self.declare_parameter('seed', -1).value
+        if seed >= 0:
+            scenario = scenario.with_seed(seed)
+        steps = self.declare_parameter('steps', 0).value
+        self.total_steps = steps if steps > 0 else scenario.steps
+        clock = self.declare_parameter('clock', 'lock_step').value
+        if clock not in CLOCKS:
+            raise ValueError(f"parameter 'clock' = {clock!r}: allowed are {sorted(CLOCKS)}")
+        self.clock = clock
+        self.period = float(self.declare_parameter('period', 1.0).value)
+        self.agent_timeout = float(self.declare_parameter('agent_timeout', 5.0).value)
+        self.startup_timeout = float(self.declare_parameter('startup_timeout', 60.0).value)
+        self.observers = int(self.declare_parameter('observers', 0).value)
+        self.radio = Radio(self.params.cooperation.comm_range,
+                           float(self.declare_parameter('radio.loss', 0.0).value),
+                           int(self.declare_parameter('radio.delay_steps', 0).value),
+                           seed=scenario.seed)
+        if self.period <= 0 or self.agent_timeout <= 0:
+            raise ValueError("parameters 'period' and 'agent_timeout' must be > 0")
+
+        self.world = World(scenario, self.params)
+        self.ids = self.world.agent_ids
+        self.active = set(self.ids)
+        self.refused = Counter()
+        self._cmds = {}
+        self._reports = {i: set() for i in self.ids}
+        self._deadline = None
+        self._started = False
+        self._ready_since = None
+        self._finished_at = None
+
+        self.step_pub = self.create_publisher(WorldStep, '/world/step', WORLD_QOS)
+        self.truth_pub = self.create_publisher(GroundTruth, '/world/truth', WORLD_QOS)
+        self.traffic_pub = self.create_publisher(RadioTraffic, '/world/radio', WORLD_QOS)
+        self.scan_pubs, self.inbox_pubs = {}, {}
+        for i in self.ids:
+            ns = f'/agent_{i}'
+            self.scan_pubs[i] = self.create_publisher(MeasurementSet, f'{ns}/measurements',
+                                                      STEP_QOS)
+            self.create_subscription(ControlCommand, f'{ns}/cmd',
+                                     lambda msg, i=i: self.on_cmd(i, msg), STEP_QOS)
+            for kind, cls in RADIO_KINDS:
+                self.inbox_pubs[(i, kind)] = self.create_publisher(
+                    cls, f'{ns}/radio/in/{kind}', RADIO_QOS)
+                self.create_subscription(
+                    cls, f'{ns}/radio/out/{kind}',
+                    lambda msg, i=i, kind=kind: self.on_report(i, kind, msg), RADIO_QOS)
+        self._launched = time.monotonic()
+        self.create_timer(0.02, self._tick)
+        self.get_logger().info(
+            f'{scenario.name}: {len(self.ids)} agents, {self.total_steps} steps, {clock} clock')
+
+    # -- start-up ---------------------------------------------------------------------------
+
+    def _graph_ready(self) -> bool:
+        """Every agent's topics are matched both ways, and the expected observers are there.
+
+        ``observers`` is how many nodes besides the agents must see the run from its first step
+        (the metrics node, a logger, a recorder): they subscribe to /world/truth and to every
+        agent's status.
+        """
+        for i in self.ids:
+            ns = f'/agent_{i}'
+            if self.scan_pubs[i].get_subscription_count() == 0:
+                return False
+            if self.count_publishers(f'{ns}/cmd') == 0:
+                return False
+            if self.count_subscribers(f'{ns}/status') < self.observers:
+                return False
+            if any(self.inbox_pubs[(i, kind)].get_subscription_count() == 0
+                   or self.count_publishers(f'{ns}/radio/out/{kind}') == 0
+                   for kind, _ in RADIO_KINDS):
+                return False
+        return self.truth_pub.get_subscription_count() >= self.observers
+
+    # -- the loop ---------------------------------------------------------------------------
+
+    def _tick(self):
+        now = time.monotonic()
+        if self._finished_at is not None:
+            # Give the last messages time to leave before the process exits.
+            if now - self._finished_at > 1.0:
+                raise RunFinished(0)
+            return
+        if not self._started:
+            self._start_when_ready(now)
+            return
+        if self.clock == 'real_time':
+            if now >= self._deadline:
+                self._finish_step()
+        elif now >= self._deadline:
+            silent = sorted(i for i in self.active if not self._answered(i))
+            self.get_logger().warning(
+                f'step {self.world.step}: agents {silent} silent for {self.agent_timeout} s: '
+                'marked inactive, they hold position')
+            self.active -= set(silent)
+            self._finish_step()
+
+    def _start_when_ready(self, now: float):
+        if not self._graph_ready():
+            self._ready_since = None
+            if now - self._launched > self.startup_timeout:
+                self.get_logger().warning('start-up timeout: starting with the agents found')
+                self._started = True
+                self._begin_step()
+            return
+        # Discovery is not symmetric at one instant: let the other nodes match too.
+        if self._ready_since is None:
+            self._ready_since = now
+        elif now - self._ready_since >= DISCOVERY_SETTLE_S:
+            self._started = True
+            self._begin_step()
+
+    def _answered(self, agent_id: int) -> bool:
+        return agent_id in self._cmds and len(self._reports[agent_id]) == len(RADIO_KINDS)
+
+    def _begin_step(self):
+        k = self.world.step
+        delivered = Counter()
+        for delivery in self.radio.due(k):
+            self.inbox_pubs[(delivery.receiver, delivery.kind)].publish(delivery.payload)
+            delivered[delivery.receiver] += 1
+        poses = self.world.poses()
+        self.step_pub.publish(self._step_msg(k, finished=False))
+        self.truth_pub.publish(self._truth_msg(k, poses))
+        lock_step = self.clock == 'lock_step'
+        for i, scan in self.world.scan_all().items():
+            self.scan_pubs[i].publish(measurements_to_msg(
+                i, k, poses[i], scan.measurements, delivered[i] if lock_step else 0))
+        self._cmds = {}
+        self._reports = {i: set() for i in self.ids}
+        self._deadline = time.monotonic() + (self.agent_timeout if lock_step else self.period)
+
+    def _maybe_finish(self):
+        if self.clock == 'lock_step' and self.active and all(map(self._answered, self.active)):
+            self._finish_step()
+
+    def _finish_step(self):
+        k = self.world.step
+        # Everything sent at step k is counted by now; links are those of s_k.
+        self.traffic_pub.publish(self._traffic_msg(k, self.world.poses()))
+        moves = self.world.apply_actions(self._cmds)
+        for agent_id, move in moves.items():
+            if not move.accepted and agent_id in self._cmds:
+                self.refused[agent_id] += 1
+                self.get_logger().warning(f'step {k}: agent {agent_id}: {move.reason}',
+                                          throttle_duration_sec=LOG_THROTTLE_S)
+        if k >= self.total_steps:
+            self.step_pub.publish(self._step_msg(k, finished=True))
+            self.get_logger().info(f'run finished after step {k}')
+            self._finished_at = time.monotonic()
+            return
+        self.world.advance()
+        self._begin_step()
+
+    # -- input ------------------------------------------------------------------------------
+
+    def _current(self, agent_id: int, msg, what: str) -> bool:
+        """Whether msg is this agent's and of the current step; a silent agent speaking rejoins."""
+        if msg.agent_id != agent_id:
+            self.get_logger().warning(
+                f'{what} on /agent_{agent_id} claims agent_id {msg.agent_id}: dropped',
+                throttle_duration_sec=LOG_THROTTLE_S)
+            return False
+        if not self._started or self._finished_at is not None or msg.step != self.world.step:
+            return False
+        if agent_id not in self.active:
+            self.get_logger().info(f'agent {agent_id} speaks again: active')
+            self.active.add(agent_id)
+        return True
+
+    def on_cmd(self, agent_id: int, msg: ControlCommand):
+        if self._current(agent_id, msg, 'cmd'):
+            self._cmds[agent_id] = int(msg.action_index)
+            self._maybe_finish()
+
+    def on_report(self, agent_id: int, kind: str, msg):
+        if self._current(agent_id, msg, f'radio/out/{kind}') and kind not in \
+                self._reports[agent_id]:
+            self._reports[agent_id].add(kind)
+            self.radio.send(msg.step, agent_id, kind, msg, len(serialize_message(msg)),
+                            self.world.poses())
+            self._maybe_finish()
+
+    # -- messages ---------------------------------------------------------------------------
+
+    def _step_msg(self, k: int, finished: bool) -> WorldStep:
+        scenario = self.world.scenario
+        return WorldStep(step=k, total_steps=self.total_steps, clock=CLOCKS[self.clock],
+                         finished=finished, scenario=scenario.name, seed=scenario.seed)
+
+    def _truth_msg(self, k: int, poses) -> GroundTruth:
+        truth = self.world.truth()
+        targets = [TargetTruth(id=int(i), alive=True, position=point(s[[0, 2]]),
+                               velocity=Vector3(x=float(s[1]), y=float(s[3]), z=0.0))
+                   for i, s in zip(truth.ids, truth.states)]
+        agents = [AgentTruth(id=i, position=point(poses[i]), active=i in self.active)
+                  for i in self.ids]
+        return GroundTruth(step=k, targets=targets, agents=agents,
+                           searched_fraction=self.world.searched_fraction())
+
+    def _traffic_msg(self, k: int, poses) -> RadioTraffic:
+        links = sorted(self.radio.links(poses))
+        pairs = sorted(self.radio.messages)
+        senders = sorted(self.radio.dropped)
+        return RadioTraffic(step=k, link_a=[a for a, _ in links], link_b=[b for _, b in links],
+                            sender=[s for s, _ in pairs], receiver=[r for _, r in pairs],
+                            messages=[self.radio.messages[p] for p in pairs],
+                            bytes=[self.radio.bytes[p] for p in pairs],
+                            drop_sender=senders, dropped=[self.radio.dropped[s] for s in senders])
+
+
+def main(args=None):
+    return run_nodes('world_sim', WorldSimNode, args)

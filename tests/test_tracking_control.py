@@ -1,0 +1,106 @@
+"""Tracking control (Eqns. pims, track_control) of sat_agent.tracking_control."""
+
+from hypothesis import given, settings, strategies as st
+import numpy as np
+import pytest
+
+from sat_agent import actions, sensor_model
+from sat_agent.config import SatParams
+from sat_agent.phd_filter import ParticlePHD, update_weights
+from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
+from sat_agent.tracking_control import (predicted_ideal_measurements, renyi_divergence,
+                                        tracking_action)
+
+PARAMS = SatParams()
+SENSOR = PARAMS.sensor
+POSE = np.array([50.0, 50.0])
+
+
+def _estimate(*points):
+    targets = tuple(TargetEstimate(np.array(p, dtype=float), np.zeros(2), np.eye(4), 1.0)
+                    for p in points)
+    return MultiTargetEstimate(targets, float(len(points)))
+
+
+def _cloud(center, count=500, spread=1.0, seed=0):
+    rng = np.random.default_rng(seed)
+    states = np.zeros((count, 4))
+    states[:, [0, 2]] = np.asarray(center) + rng.normal(0, spread, (count, 2))
+    return ParticlePHD(states, np.full(count, 1.0 / count))
+
+
+def test_ideal_measurements_are_noise_free_h_of_targets_in_view():
+    z = predicted_ideal_measurements(_estimate((53, 54), (80, 80)), POSE, SENSOR)
+    np.testing.assert_allclose(z, [[5.0, np.arctan2(4, 3)]])
+    assert predicted_ideal_measurements(_estimate(), POSE, SENSOR).shape == (0, 2)
+
+
+def test_renyi_divergence_is_zero_when_nothing_changes():
+    w = np.random.default_rng(1).random(100)
+    assert renyi_divergence(w, w.copy(), 0.5) == 0.0
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 10_000), alpha=st.floats(0.05, 0.95))
+def test_renyi_divergence_is_the_written_out_formula_and_non_negative(seed, alpha):
+    rng = np.random.default_rng(seed)
+    w = rng.random(50)
+    w_hat = w * rng.uniform(0, 3, 50)
+    expected = (w.sum() + alpha / (1 - alpha) * w_hat.sum()
+                - (w ** (1 - alpha) * w_hat ** alpha).sum() / (1 - alpha))
+    got = renyi_divergence(w, w_hat, alpha)
+    assert got == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    assert got >= -1e-12
+
+
+def test_action_that_observes_nothing_scores_zero_and_one_on_the_target_scores_more():
+    target = (60.0, 50.0)
+    predicted = _cloud(target, spread=0.5)
+    _, scores = tracking_action(predicted, _estimate(target), POSE, PARAMS)
+    moves = actions.action_displacements(PARAMS.actions)
+    poses = POSE + moves
+    sees = np.array([sensor_model.in_sensing_square(predicted.states[:, [0, 2]], p,
+                                                    SENSOR.square_side).any() for p in poses])
+    assert np.all(scores[~sees] == 0.0)
+    assert np.all(scores[sees] > 0.0)
+    assert np.argmax(scores) == 9            # 4 m towards +x: the cloud fully in view
+
+
+def test_best_action_moves_towards_the_target():
+    for direction in range(8):
+        angle = direction * np.pi / 4
+        target = POSE + 7.5 * np.array([np.cos(angle), np.sin(angle)])
+        action, _ = tracking_action(_cloud(target, spread=0.8, seed=direction),
+                                    _estimate(target), POSE, PARAMS)
+        move = actions.action_displacements(PARAMS.actions)[action]
+        assert np.dot(move, target - POSE) > 0
+
+
+def test_inadmissible_actions_are_never_chosen():
+    corner = np.array([1.0, 1.0])
+    target = (-3.0, -3.0)                    # just outside the area, beyond the corner
+    action, scores = tracking_action(_cloud(target), _estimate(target), corner, PARAMS)
+    allowed = actions.admissible_mask(corner, PARAMS.actions, PARAMS.area)
+    assert np.all(np.isneginf(scores[~allowed]))
+    assert allowed[action]
+
+
+def test_no_particles_means_stay():
+    action, scores = tracking_action(ParticlePHD.empty(), _estimate(), POSE, PARAMS)
+    assert action == 0 and np.all(scores[np.isfinite(scores)] == 0.0)
+
+
+def test_score_equals_divergence_of_a_full_pseudo_update():
+    """The pre-selection of particles near the agent does not change any score."""
+    rng = np.random.default_rng(3)
+    states = np.zeros((3000, 4))
+    states[:, [0, 2]] = rng.uniform(0, 100, (3000, 2))
+    states[:200, [0, 2]] = POSE + rng.normal(0, 2, (200, 2))
+    predicted = ParticlePHD(states, rng.random(3000) * 1e-3)
+    estimate = _estimate(POSE + 1.0)
+    _, scores = tracking_action(predicted, estimate, POSE, PARAMS)
+    for action, pose in enumerate(actions.candidate_poses(POSE, PARAMS.actions)):
+        z = predicted_ideal_measurements(estimate, pose, SENSOR)
+        full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR)
+        assert scores[action] == pytest.approx(renyi_divergence(predicted.weights, full, 0.5),
+                                               rel=1e-9)
