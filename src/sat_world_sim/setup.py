@@ -13,6 +13,7 @@ setup(
     data_files=[
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
+        (f'share/{PACKAGE}/launch', glob('launch/*.launch.py')),
         # The project's parameter and scenario files, so an installed package finds them.
         (f'share/{PACKAGE}/config', glob('../../config/*.yaml')),
         (f'share/{PACKAGE}/config/scenarios', glob('../../config/scenarios/*.yaml')),

@@ -23,10 +23,13 @@ partition of the unvisited nodes. So a joint plan at step k is made only from th
 step k-1 of all members, the agent's *own* k-1 report included (not its newer state): the
 starts are the members' k-1 poses and the node values come from the elementwise max of their
 k-1 search densities. The group is this agent plus the senders of the inbox's reports that were
-in SEARCH at k-1; since radio range is symmetric, two agents in range see each other's k-1
-report at the same step, detect the same replanning event (first contact, a member leaving
-SEARCH) and compute identical node partitions independently. Replans that only one agent makes
-(own walk exhausted, own return to SEARCH) are made alone from its current state.
+in SEARCH at k-1. Since radio range is symmetric, two agents in range see each other's k-1
+report at the same step and so see the same events: an agent joining S_k, the set of agents in
+SEARCH by the k-1 reports (first contact, meeting again, a return to SEARCH), or a member
+leaving SEARCH; both replan jointly at that step and compute identical node partitions
+independently. Replans that only one agent makes (own walk exhausted, own return to SEARCH) are
+made alone from its current state; leaving radio range does not replan (the members keep their
+walks of the joint plan, as in the paper).
 """
 
 from dataclasses import dataclass
@@ -125,6 +128,7 @@ class Agent:
         self._scratch = SearchDensity(self.filter.search.lattice)
         self._last_report: Optional[AgentReport] = None
         self.dropped_reports = 0
+        self._previous_searchers: frozenset = frozenset()
         # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
         self.filter.predict(np.asarray(initial_pose, dtype=float))
 
@@ -142,12 +146,14 @@ class Agent:
         estimate = extract_targets(self.filter.targets, pose, self.params)
         for report in reports:
             self.filter.search.fuse(report.search_values)
+        searchers = self._searchers(reports)
         was_tracking = self.modes.mode == Mode.TRACK
         leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
         mode = self.modes.update(len(estimate.targets), leaving_for is not None)
         replan = ReplanReason.NONE
         if mode == Mode.SEARCH:
-            replan = self._search_plan(pose, reports, resumed=was_tracking)
+            replan = self._search_plan(pose, reports, searchers, resumed=was_tracking)
+        self._previous_searchers = searchers
         self.filter.predict(pose)
         if mode == Mode.SEARCH:
             goal = self._search_goal(pose)
@@ -205,9 +211,25 @@ class Agent:
                 self.overlap.reset(report.agent_id)
         return leave_for
 
+    def _searchers(self, reports: Sequence[AgentReport]) -> frozenset:
+        """S_k: the agents in SEARCH according to the k-1 reports, this agent's own included.
+
+        Two agents in range build S_k from the same reports, so they see the same changes.
+        """
+        own = self._last_report
+        members = [r for r in reports if r.mode == Mode.SEARCH]
+        if own is not None and own.mode == Mode.SEARCH:
+            members.append(own)
+        return frozenset(r.agent_id for r in members)
+
     def _search_plan(self, pose: np.ndarray, reports: Sequence[AgentReport],
-                     resumed: bool) -> ReplanReason:
-        """Mark visited nodes and replan when SearchPlanner's rules say so (module docstring)."""
+                     searchers: frozenset, resumed: bool) -> ReplanReason:
+        """Mark visited nodes and replan when needed (module docstring).
+
+        SearchPlanner's rules, plus one that keeps joint plans shared: a joint replan whenever
+        an agent joins S_k (first contact, or back to SEARCH), an event every member of the
+        group sees at the same step, whatever its own plan's group is.
+        """
         own_values = self.search_map_values(self.filter.search.values)
         self.planner.mark_visited(pose, own_values)
         searching = [r for r in reports if r.mode == Mode.SEARCH]
@@ -215,6 +237,10 @@ class Agent:
         released = any(r.mode != Mode.SEARCH and r.agent_id in self.planner.group
                        for r in reports)
         reason = self.planner.needs_replan(group, released, resumed)
+        joined = self.agent_id in searchers and bool(searchers - self._previous_searchers)
+        if not reason and joined and searching:
+            # The planner's last verdict is NONE, so plan() below makes a joint plan.
+            reason = ReplanReason.NEW_NEIGHBOUR
         if not reason:
             return reason
         own = self._last_report
@@ -239,4 +265,3 @@ class Agent:
         """Eqn. search_value of every search-map node for a (ny, nx) search density."""
         self._scratch.values = density_values
         return self._scratch.node_values(self.search_map.centers, self.search_map.spacing)
-

@@ -95,7 +95,8 @@ class InProcessSwarm:
             radio_bytes={a: receivers[a] * o.report.nbytes for a, o in outputs.items()},
             overlap_events=[{'step': k, 'agent': a, 'left_for': o.left_overlap_with}
                             for a, o in outputs.items() if o.left_overlap_with is not None],
-            refused_actions={a: m.reason for a, m in moves.items() if not m.accepted})
+            refused_actions={a: m.reason for a, m in moves.items() if not m.accepted},
+            replans={a: o.replan.name for a, o in outputs.items() if o.replan})
 
     def fused_density(self) -> np.ndarray:
         """Elementwise max of every agent's search density (for display)."""
@@ -144,9 +145,11 @@ def main(argv=None) -> int:
     run = run_swarm(scenario, params, args.steps)
     metrics = write_run(run, params, args.out)
     summary = metrics['summary']
+    tracking = summary['mean_ospa_tracking']
+    tracking = 'n/a (no agent tracked)' if tracking is None else f'{tracking:.2f} m'
     print(f'{scenario.name} seed {scenario.seed}: {len(run.records)} steps in '
           f"{run.seconds:.1f} s, searched {summary['final_searched_pct']:.1f} %, "
-          f"mean OSPA while tracking {summary['mean_ospa_tracking']}", file=sys.stderr)
+          f'mean OSPA while tracking {tracking}', file=sys.stderr)
     print(Path(args.out))
     return 0
 

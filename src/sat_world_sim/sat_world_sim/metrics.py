@@ -50,6 +50,7 @@ class StepRecord:
     radio_bytes: Dict[int, int] = field(default_factory=dict)
     overlap_events: List[dict] = field(default_factory=list)
     refused_actions: Dict[int, str] = field(default_factory=dict)
+    replans: Dict[int, str] = field(default_factory=dict)   # agent id -> why it replanned
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,161 @@
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sat_agent.config import load_params_file
+from sat_world_sim.inprocess_swarm import InProcessSwarm, main, run_swarm
+from sat_world_sim.metrics import compute_metrics
+from sat_world_sim.scenario import load_scenario, scenario_from_mapping
+
+CONFIG = Path(__file__).resolve().parent.parent / 'config'
+PARAMS = CONFIG / 'paper.yaml'
+SEEDS = range(10)
+
+
+@pytest.fixture(scope='module')
+def params():
+    return load_params_file(PARAMS)
+
+
+@pytest.fixture(scope='module')
+def single_target_runs(params):
+    """Run the single-agent find-and-track scenario over 10 seeds: one metrics dict per seed."""
+    scenario = load_scenario(CONFIG / 'scenarios' / 'single_target.yaml')
+    runs = []
+    for seed in SEEDS:
+        run = run_swarm(scenario.with_seed(seed), params)
+        runs.append(compute_metrics(run.records, scenario.name, seed))
+    return runs
+
+
+@pytest.fixture(scope='module')
+def paper_run(params):
+    scenario = load_scenario(CONFIG / 'scenarios' / 'paper.yaml')
+    run = run_swarm(scenario, params)
+    return run, compute_metrics(run.records, scenario.name, scenario.seed)
+
+
+def mean_ospa_while_tracking(metrics):
+    tracked = [s['ospa'] for s in metrics['steps'] if s['tracking']]
+    return float(np.mean(tracked)) if tracked else None
+
+
+def test_single_agent_loop_detects_the_target_it_passes(single_target_runs):
+    (target,) = single_target_runs[0]['targets']
+    assert target['born'] == 3 and target['first_in_view'] == 3
+    delays = [m['targets'][0]['detection_delay'] for m in single_target_runs]
+    detected = [d for d in delays if d is not None and d <= 10]
+    # A plumbing check (scan -> filter -> estimate -> metrics): 5 of 10 seeds with the current
+    # filter and config/paper.yaml, see the helper report.
+    assert len(detected) >= 4, delays
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    'issue requirement not met by the current filter: with config/paper.yaml the mean OSPA '
+    'while tracking is ~8 m over the 10 seeds (clutter-born false targets and split targets '
+    'in the PHD extraction); see the helper report. Remove this marker once it passes.'))
+def test_single_agent_finds_and_tracks_a_moving_target_with_mean_ospa_below_2m(
+        single_target_runs):
+    per_seed = [mean_ospa_while_tracking(m) for m in single_target_runs]
+    assert all(value is not None for value in per_seed), per_seed
+    assert all(value < 2.0 for value in per_seed), per_seed
+
+
+def test_paper_run_records_every_step_and_both_scripted_targets(paper_run):
+    run, metrics = paper_run
+    assert [s['step'] for s in metrics['steps']] == list(range(1, 201))
+    targets = {t['id']: t for t in metrics['targets']}
+    assert (targets[1]['born'], targets[1]['died']) == (104, 179)
+    assert (targets[2]['born'], targets[2]['died']) == (144, 182)
+    assert [s['n_true'] for s in metrics['steps']][102:105] == [0, 1, 1]
+    searched = [s['searched_pct'] for s in metrics['steps']]
+    assert all(b >= a for a, b in zip(searched, searched[1:]))
+    assert not any(run.records[i].refused_actions for i in range(200))
+    json.dumps(metrics)
+
+
+def paper_figures(run, metrics):
+    """Return the four figures the issue asks of the in-process paper run."""
+    steps = metrics['steps']
+    targets = metrics['targets']
+    released = [r.step for r in run.records if 'TRACK' in r.modes.values() and any(
+        r.modes[a] == 'SEARCH' and why == 'RELEASED' for a, why in r.replans.items())]
+    return {
+        'searched_by_103': steps[102]['searched_pct'],
+        'detection_delays': [t['detection_delay'] for t in targets],
+        'mean_ospa_tracking': mean_ospa_while_tracking(metrics),
+        'released_steps': released,
+    }
+
+
+UNMET = ('not met with config/paper.yaml: clutter-born false targets send the agents into '
+         'TRACK early (see the helper report for the figures and the parameter study); remove '
+         'this marker once it passes')
+
+
+@pytest.mark.xfail(strict=True, reason=UNMET)
+def test_paper_run_searches_65_percent_of_the_area_by_step_103(paper_run):
+    assert paper_figures(*paper_run)['searched_by_103'] >= 65.0
+
+
+@pytest.mark.xfail(strict=True, reason=UNMET)
+def test_paper_run_detects_each_target_within_10_steps_of_entering_a_square(paper_run):
+    delays = paper_figures(*paper_run)['detection_delays']
+    assert all(d is not None and 0 <= d <= 10 for d in delays), delays
+
+
+@pytest.mark.xfail(strict=True, reason=UNMET)
+def test_paper_run_mean_ospa_while_some_agent_tracks_is_at_most_3m(paper_run):
+    value = paper_figures(*paper_run)['mean_ospa_tracking']
+    assert value is not None and value <= 3.0
+
+
+def test_paper_run_one_agent_tracks_while_the_other_searches_its_released_nodes(paper_run):
+    assert paper_figures(*paper_run)['released_steps']
+
+
+def test_radio_carries_reports_only_between_agents_in_range(params):
+    scenario = load_scenario(CONFIG / 'scenarios' / 'paper.yaml')
+    swarm = InProcessSwarm(scenario, params)
+    first = swarm.step()
+    # (10, 60) and (60, 10) are 70.7 m apart: nothing is sent to anyone at k = 1.
+    assert first.radio_messages == {1: 0, 2: 0}
+    assert swarm.inbox(1) == [] and swarm.inbox(2) == []
+    close = scenario_from_mapping({'seed': 1, 'steps': 3, 'agents': [
+        {'id': 1, 'start': [10.0, 10.0]}, {'id': 2, 'start': [40.0, 10.0]},
+        {'id': 3, 'start': [95.0, 95.0]}]})
+    swarm = InProcessSwarm(close, params)
+    record = swarm.step()
+    assert record.radio_messages == {1: 1, 2: 1, 3: 0}
+    # One report a step: a float64 100 x 100 search density plus header and targets.
+    assert record.radio_bytes[1] > 80_000 and record.radio_bytes[3] == 0
+    assert [r.agent_id for r in swarm.inbox(1)] == [2]
+    assert [r.agent_id for r in swarm.inbox(2)] == [1]
+    assert swarm.inbox(3) == []
+    assert all(r.step == 1 for r in swarm.inbox(1))
+
+
+def test_same_seed_same_metrics_and_cli_writes_the_run_directory(tmp_path, capsys):
+    scenario = str(CONFIG / 'scenarios' / 'single_target.yaml')
+    out = tmp_path / 'run'
+    assert main(['--scenario', scenario, '--params', str(PARAMS), '--out', str(out),
+                 '--seed', '3', '--steps', '12']) == 0
+    assert capsys.readouterr().out.strip().splitlines()[-1] == str(out)
+    metrics = json.loads((out / 'metrics.json').read_text())
+    assert metrics['seed'] == 3 and len(metrics['steps']) == 12
+    assert sorted(p.name for p in (out / 'plots').iterdir()) == [
+        'cardinality.png', 'ospa.png', 'searched.png', 'trajectories.png']
+    again = tmp_path / 'again'
+    main(['--scenario', scenario, '--params', str(PARAMS), '--out', str(again), '--seed', '3',
+          '--steps', '12'])
+    assert (again / 'metrics.json').read_bytes() == (out / 'metrics.json').read_bytes()
+
+
+def test_cli_refuses_a_bad_scenario_with_a_clear_message(tmp_path, capsys):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('seed: 1\nsteps: 10\nagents: [{id: 1, start: [500, 1]}]\n')
+    assert main(['--scenario', str(bad), '--params', str(PARAMS), '--out',
+                 str(tmp_path / 'r')]) == 2
+    assert "'agents[0].start[0]' = 500" in capsys.readouterr().err

@@ -1,0 +1,182 @@
+"""The swarm as separate OS processes over DDS.
+
+First contact, the paper's run, determinism, overlap resolution and a killed agent. Every process
+is started here and stopped by its pid.
+"""
+
+import json
+import os
+import signal
+import time
+
+import numpy as np
+import pytest
+import rclpy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from ros_harness import executable, PARAMS, REPO, run_swarm, started, write_scenario
+
+from sat_msgs.msg import AgentStatus, SearchDensity, WorldStep
+
+pytestmark = pytest.mark.ros
+RELIABLE = QoSProfile(depth=300, reliability=ReliabilityPolicy.RELIABLE)
+WORLD = QoSProfile(depth=300, reliability=ReliabilityPolicy.RELIABLE,
+                   durability=DurabilityPolicy.TRANSIENT_LOCAL)
+PAPER = REPO / 'config' / 'scenarios' / 'paper.yaml'
+
+
+def world_command(scenario, *params):
+    args = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file', str(PARAMS),
+            '-p', f'scenario:={scenario}']
+    for param in params:
+        args += ['-p', param]
+    return args
+
+
+def agent_command(agent_id):
+    return [executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{agent_id}',
+            '--params-file', str(PARAMS), '-p', f'agent_id:={agent_id}']
+
+
+class Observer:
+    """Records /world/step, every agent's status and the search densities they send."""
+
+    def __init__(self, node, agent_ids):
+        self.steps, self.finished = [], False
+        self.status = {}         # (agent, step) -> AgentStatus
+        self.density = {}        # (agent, step) -> (ny, nx) values sent
+        node.create_subscription(WorldStep, '/world/step', self.on_step, WORLD)
+        for i in agent_ids:
+            node.create_subscription(AgentStatus, f'/agent_{i}/status',
+                                     lambda m, i=i: self.status.__setitem__((i, m.step), m),
+                                     RELIABLE)
+            node.create_subscription(
+                SearchDensity, f'/agent_{i}/radio/out/search_density',
+                lambda m, i=i: self.density.__setitem__(
+                    (i, m.step), np.asarray(m.values).reshape(m.grid.height, m.grid.width)),
+                RELIABLE)
+
+    def on_step(self, msg):
+        self.steps.append((time.monotonic(), msg.step))
+        self.finished = self.finished or msg.finished
+
+
+def spin_until(node, done, timeout, processes=()):
+    deadline = time.monotonic() + timeout
+    while not done() and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+        for process in processes:
+            assert process.poll() in (None, 0), f'process {process.args[0]} died'
+    return done()
+
+
+@pytest.fixture
+def ros_node():
+    rclpy.init()
+    node = rclpy.create_node('swarm_test_observer')
+    yield node
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+@pytest.mark.timeout(240)
+def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, ros_node):
+    observer = Observer(ros_node, (1, 2))
+    world = world_command(PAPER, 'steps:=60', 'observers:=1')
+    with started(world, tmp_path / 'world.log') as w, \
+            started(agent_command(1), tmp_path / 'a1.log') as a1, \
+            started(agent_command(2), tmp_path / 'a2.log') as a2:
+        assert spin_until(ros_node, lambda: observer.finished, 180, (w, a1, a2))
+        spin_until(ros_node, lambda: (2, 60) in observer.status and (1, 60) in observer.status, 5)
+    joint = sorted(k for k in range(1, 61)
+                   if all(list(observer.status[(i, k)].group) == [1, 2] for i in (1, 2)))
+    assert joint, 'the agents never planned together'
+    contact = joint[0]
+    # Both switched at the same step, each on its own, from the reports of step contact - 1.
+    for i in (1, 2):
+        assert list(observer.status[(i, contact - 1)].group) == [i]
+    plans = [{(round(p.x, 6), round(p.y, 6)) for p in observer.status[(i, contact)].plan[:-1]}
+             for i in (1, 2)]
+    assert plans[0] and plans[1] and not plans[0] & plans[1], 'joint walks share nodes'
+    # Fusion: what each sends at `contact` covers what the other sent at contact - 1.
+    for i, j in ((1, 2), (2, 1)):
+        assert np.all(observer.density[(i, contact)] >= observer.density[(j, contact - 1)])
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_paper_scenario_through_the_ros_graph(tmp_path):
+    code, metrics, output = run_swarm(tmp_path / 'run', PAPER)
+    assert code == 0, output[-3000:]
+    steps = metrics['steps']
+    assert [s['step'] for s in steps] == list(range(1, 201))
+    searched_103 = max(s['searched_pct'] for s in steps if s['step'] <= 103)
+    assert searched_103 >= 65.0
+    # Coverage keeps growing while an agent tracks.
+    tracking = [s for s in steps if s['tracking']]
+    assert tracking and tracking[-1]['searched_pct'] > tracking[0]['searched_pct']
+    for target in metrics['targets']:
+        assert target['detection_delay'] is not None and target['detection_delay'] <= 10, target
+    assert np.mean([s['ospa'] for s in tracking]) <= 3.0
+    # One tracks while the other searches.
+    assert any(sorted(s['modes'].values()) == ['SEARCH', 'TRACK'] for s in tracking)
+    plots = sorted(p.name for p in (tmp_path / 'run' / 'plots').glob('*.png'))
+    assert plots == ['cardinality.png', 'ospa.png', 'searched.png', 'trajectories.png']
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_lock_step_runs_with_one_seed_give_identical_metrics(tmp_path):
+    texts = []
+    for name in ('a', 'b'):
+        code, metrics, output = run_swarm(tmp_path / name, PAPER, '--steps', '120', '--seed', '5')
+        assert code == 0, output[-3000:]
+        texts.append((tmp_path / name / 'metrics.json').read_text())
+    assert texts[0] == texts[1]
+    assert json.loads(texts[0])['seed'] == 5
+
+
+@pytest.mark.timeout(300)
+def test_two_trackers_on_the_same_target_end_with_one_tracking(tmp_path):
+    scenario = write_scenario(
+        tmp_path / 'overlap.yaml', name='overlap', seed=2, steps=60, truth_process_noise=1e-4,
+        agents=[{'id': 1, 'start': [47.0, 50.0]}, {'id': 2, 'start': [53.0, 50.0]}],
+        targets=[{'id': 1, 'born': 1, 'died': 60, 'start': [50.0, 50.0], 'end': [62.0, 50.0]}])
+    code, metrics, output = run_swarm(tmp_path / 'run', scenario)
+    assert code == 0, output[-3000:]
+    steps = metrics['steps']
+    both = [s['step'] for s in steps if list(s['modes'].values()) == ['TRACK', 'TRACK']]
+    assert both, 'the two agents never tracked together'
+    events = metrics['overlap_events']
+    assert events and events[0]['agent'] == 2 and events[0]['left_for'] == 1
+    resolved = events[0]['step']
+    window = 5
+    assert resolved - both[0] <= window + 1
+    after = [s for s in steps if s['step'] > resolved]
+    assert after and all(s['modes'] == {'1': 'TRACK', '2': 'SEARCH'} for s in after[:5])
+
+
+@pytest.mark.timeout(300)
+def test_a_killed_agent_stalls_the_world_at_most_the_timeout(tmp_path, ros_node):
+    observer = Observer(ros_node, ())
+    timeout = 3.0
+    run_dir = tmp_path / 'run'
+    world = world_command(PAPER, 'steps:=80', 'observers:=2', f'agent_timeout:={timeout}')
+    metrics = [executable('sat_world_sim', 'metrics'), '--ros-args', '--params-file',
+               str(PARAMS), '-p', f'run_dir:={run_dir}', '-p', 'agent_ids:=[1,2]']
+    with started(world, tmp_path / 'world.log') as w, \
+            started(metrics, tmp_path / 'metrics.log') as m, \
+            started(agent_command(1), tmp_path / 'a1.log'), \
+            started(agent_command(2), tmp_path / 'a2.log') as a2:
+        assert spin_until(ros_node, lambda: observer.steps and observer.steps[-1][1] >= 30, 120)
+        os.kill(a2.pid, signal.SIGKILL)
+        a2.wait()
+        killed_at = observer.steps[-1][1]
+        assert spin_until(ros_node, lambda: observer.finished, 120, (w,))
+        m.wait(timeout=30)
+        assert m.returncode == 0
+    gaps = np.diff([t for t, _ in observer.steps])
+    assert gaps.max() <= timeout + 1.5, f'world stalled {gaps.max():.1f} s'
+    result = json.loads((run_dir / 'metrics.json').read_text())
+    assert [s['step'] for s in result['steps']] == list(range(1, 81))
+    later = [s for s in result['steps'] if s['step'] > killed_at + 1]
+    assert all(list(s['modes']) == ['1'] for s in later), 'a dead agent still reported'
