@@ -154,6 +154,10 @@ class Agent:
         if mode == Mode.SEARCH:
             replan = self._search_plan(pose, reports, searchers, resumed=was_tracking)
         self._previous_searchers = searchers
+        # The report carries the posterior (fused) density of step k, in float32 as on the wire,
+        # so in-process and ROS runs exchange the very same values.
+        report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
+                             self.filter.search.values.astype(np.float32), estimate)
         self.filter.predict(pose)
         if mode == Mode.SEARCH:
             goal = self._search_goal(pose)
@@ -164,8 +168,6 @@ class Agent:
             action, _ = tracking_action(self.filter.targets, predicted, pose, self.params)
             goal = candidate_poses(pose, self.params.actions)[action]
             plan = np.zeros((0, 2))
-        report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
-                             self.filter.search.values.copy(), estimate)
         self._last_report = report
         return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
                            mode, leaving_for, replan)

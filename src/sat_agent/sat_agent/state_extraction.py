@@ -1,22 +1,29 @@
 """Multi-target state extraction from the particle PHD (Section "Search-and-Track Density").
 
-n_hat = round(integral of D^1 over R) with R the sensing square grown by
-``phd.extraction_margin``; the targets are the n_hat highest peaks of the PHD in R. Peaks are
-found deterministically (no random numbers, ties go to the lowest index):
+The paper estimates n_hat(R) = round(integral of D^1 over R) targets in a region R and takes the
+n_hat highest peaks. Rounding the mass of the whole sensing square counts diffuse mass as a
+target: under lambda = 10 clutter every scan leaves small clouds of clutter-born mass (each
+< 0.5, together often > 0.5) scattered over the square. So the regions R here are the PHD's
+peaks: mass is counted per peak, and a peak stands for round(its mass) targets.
 
-1. seeds: the particle weights in R are binned on a 1 m grid and smoothed over 3 x 3 cells; the
-   heaviest cell is a seed, cells within ``PEAK_SEPARATION`` of it are suppressed, and so on
-   until n_hat seeds (if suppression leaves too few cells, the heaviest unchosen cells are used);
-2. refinement: weighted Lloyd iterations (assign every particle to its nearest centre, move each
-   centre to the weighted mean of its particles within ``PEAK_RADIUS``), so diffuse mass assigned
-   to a cluster does not drag its peak.
+Within the extraction region (the sensing square grown by ``phd.extraction_margin``):
 
-Each estimate carries the cluster's weighted mean velocity, its weighted covariance (spread) and
-its PHD mass (weight).
+1. peak: the heaviest cell of the particle weights binned on a ``PEAK_CELL`` grid and smoothed
+   over 3 x 3 cells, refined by a few weighted mean-shift steps over the particles within
+   ``PEAK_RADIUS`` (so diffuse mass nearby does not drag it);
+2. region R = the particles not yet claimed within ``PEAK_RADIUS`` of the peak; it stands for
+   n = round(mass of R) targets: one estimate when n = 1, n weighted k-means clusters (seeded
+   from the heaviest particles, deterministic) when targets are closer than ``PEAK_RADIUS``;
+3. R's particles are claimed and the next peak is sought, until the unclaimed mass in the
+   region is below 0.5 (no further peak can round to a target).
+
+No random numbers are used and ties go to the lowest index, so the same PHD always gives the same
+estimate. Each estimate carries its cluster's weighted mean velocity, its weighted covariance
+(the spread) and its PHD mass (weight). ``cardinality`` is the mass of the whole region.
 """
 
 from dataclasses import dataclass
-from typing import Tuple
+from typing import List, Tuple
 
 import numpy as np
 from scipy import ndimage
@@ -25,12 +32,15 @@ from sat_agent import motion_model, sensor_model
 from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD
 
-# A target's posterior cloud is about 1 m wide (sigma_r ~ 1 m in the square); bins of that size
-# resolve it, and peaks closer than 2 m are one target blurred by the motion noise.
+# A target's posterior cloud is about 1 m wide (sigma_r ~ 1 m in the square): bins of that size
+# resolve it.
 PEAK_CELL = 1.0
-PEAK_SEPARATION = 2.0
+# A peak's region: a target's predicted cloud (paper's Q) is ~1.5 m wide, so 3 m holds it.
 PEAK_RADIUS = 3.0
+MEAN_SHIFT_STEPS = 5
 LLOYD_ITERATIONS = 10
+# More peaks than any square can hold targets; bounds the loop on pathological input.
+MAX_PEAKS = 50
 
 
 @dataclass(frozen=True)
@@ -62,66 +72,77 @@ def extract_targets(phd: ParticlePHD, pose, params: SatParams) -> MultiTargetEst
     side = params.sensor.square_side + 2.0 * params.phd.extraction_margin
     points = motion_model.positions(phd.states)
     region = sensor_model.in_sensing_square(points, pose, side)
-    weights = phd.weights[region]
+    states, points, weights = phd.states[region], points[region], phd.weights[region]
     mass = float(weights.sum())
-    count = min(int(np.floor(mass + 0.5)), int(np.count_nonzero(weights > 0.0)))
-    if count <= 0:
-        return MultiTargetEstimate((), mass)
-    states = phd.states[region]
-    points = points[region]
-    centers = _peak_seeds(points, weights, count, np.asarray(pose, dtype=float) - side / 2.0,
-                          side)
-    labels, centers = _weighted_lloyd(points, weights, centers)
-    estimates = []
-    for index in range(len(centers)):
-        member = labels == index
-        if weights[member].sum() > 0.0:
-            estimates.append(_summarise(states[member], weights[member], centers[index]))
+    origin = np.asarray(pose, dtype=float) - side / 2.0
+    unclaimed = weights > 0.0
+    estimates: List[TargetEstimate] = []
+    for _ in range(MAX_PEAKS):
+        if weights[unclaimed].sum() < 0.5:
+            break
+        peak = _mean_shift(points, weights, unclaimed,
+                           _densest_cell(points[unclaimed], weights[unclaimed], origin, side))
+        member = unclaimed & (np.hypot(*(points - peak).T) < PEAK_RADIUS)
+        unclaimed &= ~member
+        count = int(np.floor(weights[member].sum() + 0.5))
+        if count == 1:
+            estimates.append(_summarise(states[member], weights[member], peak))
+        elif count > 1:
+            estimates.extend(_split(states[member], points[member], weights[member], count))
     return MultiTargetEstimate(tuple(estimates), mass)
 
 
-def _peak_seeds(points: np.ndarray, weights: np.ndarray, count: int, origin: np.ndarray,
-                side: float) -> np.ndarray:
-    """Greedy non-maximum suppression on the smoothed weight histogram: (count, 2) seeds."""
+def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,
+                  side: float) -> np.ndarray:
+    """Centre of the heaviest cell of the 3 x 3-smoothed weight histogram."""
     bins = max(1, int(np.ceil(side / PEAK_CELL)))
     cell = np.clip(np.floor((points - origin) / PEAK_CELL).astype(int), 0, bins - 1)
     histogram = np.bincount(cell[:, 1] * bins + cell[:, 0], weights=weights,
                             minlength=bins * bins).reshape(bins, bins)
     smooth = ndimage.uniform_filter(histogram, size=3, mode='constant')
-    grid = (np.arange(bins) + 0.5) * PEAK_CELL
-    cell_x, cell_y = np.meshgrid(origin[0] + grid, origin[1] + grid)
-    score = np.where(histogram > 0.0, smooth, -np.inf).ravel()
-    fallback = score.copy()
-    seeds = []
-    for _ in range(count):
-        best = int(np.argmax(score)) if np.isfinite(score.max()) else int(np.argmax(fallback))
-        seeds.append((cell_x.flat[best], cell_y.flat[best]))
-        near = np.hypot(cell_x.ravel() - cell_x.flat[best],
-                        cell_y.ravel() - cell_y.flat[best]) < PEAK_SEPARATION
-        score[near] = -np.inf
-        fallback[best] = -np.inf
-    return np.array(seeds)
+    row, col = np.unravel_index(int(np.argmax(smooth)), smooth.shape)
+    return origin + (np.array([col, row]) + 0.5) * PEAK_CELL
 
 
-def _weighted_lloyd(points: np.ndarray, weights: np.ndarray, centers: np.ndarray):
-    """Weighted k-means with trimmed centre updates; returns (labels (N,), centers (K, 2))."""
-    centers = centers.copy()
-    labels = np.zeros(len(points), dtype=int)
+def _mean_shift(points: np.ndarray, weights: np.ndarray, active: np.ndarray,
+                center: np.ndarray) -> np.ndarray:
+    """Move center to the weighted mean of the active particles within PEAK_RADIUS, repeatedly."""
+    for _ in range(MEAN_SHIFT_STEPS):
+        near = active & (np.hypot(*(points - center).T) < PEAK_RADIUS)
+        total = weights[near].sum()
+        if total <= 0.0:
+            break
+        moved = weights[near] @ points[near] / total
+        if np.allclose(moved, center, rtol=0.0, atol=1e-6):
+            break
+        center = moved
+    return center
+
+
+def _split(states: np.ndarray, points: np.ndarray, weights: np.ndarray,
+           count: int) -> List[TargetEstimate]:
+    """Weighted k-means of one peak region into count targets (seeds: heaviest particles)."""
+    order = np.argsort(-weights, kind='stable')
+    centers = [points[order[0]]]
+    for index in order[1:]:
+        if len(centers) == count:
+            break
+        if min(np.hypot(*(np.array(centers) - points[index]).T)) > PEAK_CELL:
+            centers.append(points[index])
+    centers = np.array(centers)
     for _ in range(LLOYD_ITERATIONS):
-        distance = np.linalg.norm(points[:, None, :] - centers[None, :, :], axis=2)
-        labels = np.argmin(distance, axis=1)
-        near = distance[np.arange(len(points)), labels] < PEAK_RADIUS
-        mass = np.bincount(labels[near], weights=weights[near], minlength=len(centers))
-        moved = centers.copy()
-        for axis in range(2):
-            total = np.bincount(labels[near], weights=weights[near] * points[near, axis],
-                                minlength=len(centers))
-            moved[:, axis] = np.where(mass > 0.0, total / np.where(mass > 0.0, mass, 1.0),
-                                      centers[:, axis])
+        labels = np.argmin(np.linalg.norm(points[:, None, :] - centers[None], axis=2), axis=1)
+        mass = np.bincount(labels, weights=weights, minlength=len(centers))
+        moved = np.column_stack([
+            np.bincount(labels, weights=weights * points[:, axis], minlength=len(centers))
+            for axis in range(2)]) / np.where(mass > 0.0, mass, 1.0)[:, None]
+        moved[mass <= 0.0] = centers[mass <= 0.0]
         if np.allclose(moved, centers, rtol=0.0, atol=1e-9):
             break
         centers = moved
-    return labels, centers
+    labels = np.argmin(np.linalg.norm(points[:, None, :] - centers[None], axis=2), axis=1)
+    return [_summarise(states[labels == i], weights[labels == i], centers[i])
+            for i in range(len(centers)) if weights[labels == i].sum() > 0.0]
 
 
 def _summarise(states: np.ndarray, weights: np.ndarray, center: np.ndarray) -> TargetEstimate:
