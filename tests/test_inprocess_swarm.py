@@ -128,9 +128,10 @@ def test_radio_carries_reports_only_between_agents_in_range(params):
         {'id': 3, 'start': [95.0, 95.0]}]})
     swarm = InProcessSwarm(close, params)
     record = swarm.step()
-    assert record.radio_messages == {1: 1, 2: 1, 3: 0}
-    # One report a step: a float64 100 x 100 search density plus header and targets.
-    assert record.radio_bytes[1] > 80_000 and record.radio_bytes[3] == 0
+    # One report a step: three messages (density, estimate, mode) to the one neighbour.
+    assert record.radio_messages == {1: 3, 2: 3, 3: 0}
+    # A float32 100 x 100 search density dominates the bytes.
+    assert 40_000 < record.radio_bytes[1] < 41_000 and record.radio_bytes[3] == 0
     assert [r.agent_id for r in swarm.inbox(1)] == [2]
     assert [r.agent_id for r in swarm.inbox(2)] == [1]
     assert swarm.inbox(3) == []

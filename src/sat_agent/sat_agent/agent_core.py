@@ -48,11 +48,26 @@ from sat_agent.state_extraction import extract_targets, MultiTargetEstimate
 from sat_agent.tracking_control import tracking_action
 from sat_agent.tracking_overlap import OverlapMonitor
 
-# Fixed part of a report on the wire: agent id, step (int32 each), pose (2 float64), mode
-# (uint8), cardinality (float64). Used for the radio's byte accounting.
-_HEADER_BYTES = 4 + 4 + 16 + 1 + 8
-# One TargetEstimate: position (2), velocity (2), covariance (16), weight (1) as float64.
+# Radio accounting: payload bytes of the three messages of a report (what the paper exchanges),
+# without DDS/RTPS overhead. Every message carries agent id and step (uint32 each); the density
+# is float32 per lattice cell; the estimate has the pose, the cardinality (float64) and per
+# target position, velocity (2 float64 each), a 4 x 4 covariance and a weight (float64); the mode
+# message has the mode (uint8) and the pose. The ROS radio counts with the same function.
+REPORT_KINDS = ('search_density', 'estimate', 'mode')
+_ID_STEP_BYTES = 4 + 4
+_POSE_BYTES = 2 * 8
 _TARGET_BYTES = 8 * (2 + 2 + 16 + 1)
+
+
+def wire_bytes(kind: str, count: int = 0) -> int:
+    """Payload bytes of one radio message: count = density cells or estimated targets."""
+    if kind == 'search_density':
+        return _ID_STEP_BYTES + 4 * count
+    if kind == 'estimate':
+        return _ID_STEP_BYTES + _POSE_BYTES + 8 + _TARGET_BYTES * count
+    if kind == 'mode':
+        return _ID_STEP_BYTES + 1 + _POSE_BYTES
+    raise ValueError(f'unknown radio message kind {kind!r}: allowed are {REPORT_KINDS}')
 
 
 @dataclass(frozen=True, eq=False)
@@ -72,9 +87,9 @@ class AgentReport:
 
     @property
     def nbytes(self) -> int:
-        """Size of the report on the wire (header, float64 density, targets)."""
-        return (_HEADER_BYTES + int(self.search_values.nbytes)
-                + _TARGET_BYTES * len(self.estimate.targets))
+        """Payload bytes of the report's three radio messages (see wire_bytes)."""
+        return (wire_bytes('search_density', int(np.size(self.search_values)))
+                + wire_bytes('estimate', len(self.estimate.targets)) + wire_bytes('mode'))
 
     def target_positions(self) -> np.ndarray:
         """(n, 2) estimated target positions."""

@@ -28,7 +28,7 @@ from typing import Dict, List, Optional
 
 import numpy as np
 
-from sat_agent.agent_core import Agent, AgentOutput, AgentReport
+from sat_agent.agent_core import Agent, AgentOutput, AgentReport, REPORT_KINDS
 from sat_agent.config import load_params_file, ParameterError, SatParams
 
 from sat_world_sim.metrics import compute_metrics, StepRecord, write_metrics
@@ -91,7 +91,7 @@ class InProcessSwarm:
             estimates={a: o.report.target_positions() for a, o in outputs.items()},
             plans={a: o.plan for a, o in outputs.items()},
             searched_fraction=searched,
-            radio_messages={a: receivers[a] for a in outputs},
+            radio_messages={a: len(REPORT_KINDS) * receivers[a] for a in outputs},
             radio_bytes={a: receivers[a] * o.report.nbytes for a, o in outputs.items()},
             overlap_events=[{'step': k, 'agent': a, 'left_for': o.left_overlap_with}
                             for a, o in outputs.items() if o.left_overlap_with is not None],

@@ -29,8 +29,8 @@ from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import serialize_message
 
+from sat_agent.agent_core import wire_bytes
 from sat_agent.msg_conversions import measurements_to_msg, point
 from sat_agent.node_runner import run_nodes, RunFinished
 from sat_agent.ros_params import declare_sat_params
@@ -249,7 +249,9 @@ class WorldSimNode(Node):
         if self._current(agent_id, msg, f'radio/out/{kind}') and kind not in \
                 self._reports[agent_id]:
             self._reports[agent_id].add(kind)
-            self.radio.send(msg.step, agent_id, kind, msg, len(serialize_message(msg)),
+            count = len(msg.values) if kind == 'search_density' else len(
+                getattr(msg, 'targets', ()))
+            self.radio.send(msg.step, agent_id, kind, msg, wire_bytes(kind, count),
                             self.world.poses())
             self._maybe_finish()
 
