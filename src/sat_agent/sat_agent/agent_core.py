@@ -123,6 +123,13 @@ class AgentOutput:
     replan: ReplanReason = ReplanReason.NONE
 
 
+def _predicted_positions(estimate: MultiTargetEstimate, dt: float) -> np.ndarray:
+    """(n, 2) positions x + v T of the estimated targets one step ahead."""
+    if not estimate.targets:
+        return np.zeros((0, 2))
+    return np.array([t.position + dt * t.velocity for t in estimate.targets], dtype=float)
+
+
 class Agent:
     """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
 
@@ -144,6 +151,7 @@ class Agent:
         self._last_report: Optional[AgentReport] = None
         self.dropped_reports = 0
         self._previous_searchers: frozenset = frozenset()
+        self._expected = np.zeros((0, 2))
         # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
         self.filter.predict(np.asarray(initial_pose, dtype=float))
 
@@ -158,7 +166,11 @@ class Agent:
         measurements = np.asarray(measurements, dtype=float).reshape(-1, 2)
         reports = self._valid_reports(step, inbox)
         self.filter.correct(measurements, pose)
-        estimate = extract_targets(self.filter.targets, pose, self.params)
+        estimate = extract_targets(self.filter.targets, pose, self.params,
+                                   previous=self._expected)
+        # Where this step's targets should be at k+1 (x + v T): the track-continuity gate of
+        # the next extraction (state_extraction's module docstring).
+        self._expected = _predicted_positions(estimate, self.params.motion.dt)
         for report in reports:
             self.filter.search.fuse(report.search_values)
         searchers = self._searchers(reports)
@@ -179,7 +191,8 @@ class Agent:
             action = search_action(pose, goal, self.params)
             plan = self.planner.walk_points()
         else:
-            predicted = extract_targets(self.filter.targets, pose, self.params)
+            predicted = extract_targets(self.filter.targets, pose, self.params,
+                                        previous=self._expected)
             action, _ = tracking_action(self.filter.targets, predicted, pose, self.params)
             goal = candidate_poses(pose, self.params.actions)[action]
             plan = np.zeros((0, 2))

@@ -32,7 +32,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.utilities import remove_ros_args
 
 from sat_agent.actions import candidate_poses
-from sat_agent.agent_core import Agent
+from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
                                        point, report_from_msgs, report_to_msgs)
 from sat_agent.node_runner import run_nodes
@@ -40,8 +40,7 @@ from sat_agent.ros_params import declare_required_int, declare_sat_params
 from sat_msgs.msg import (AgentMode, AgentStatus, ControlCommand, MeasurementSet,
                           MultiTargetEstimate, SearchDensity)
 
-RADIO_KINDS = (('search_density', SearchDensity), ('estimate', MultiTargetEstimate),
-               ('mode', AgentMode))
+RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
 STEP_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 RADIO_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # Particles shown to the logger per step: enough to see the cloud, small on the wire.
@@ -151,7 +150,7 @@ class AgentNode(Node):
             self.core = Agent(self.agent_id, self.params, pose, seed=self.seed)
         output = self.core.step(msg.step, pose, measurements, self._inbox(msg.step))
         self.last_step = msg.step
-        for kind, out in zip(('search_density', 'estimate', 'mode'),
+        for kind, out in zip(REPORT_KINDS,
                              report_to_msgs(output.report, self.core.filter.search.lattice)):
             self.radio_pubs[kind].publish(out)
         self.status_pub.publish(self._status(msg.step, pose, output,
@@ -171,7 +170,7 @@ class AgentNode(Node):
             estimate=estimate_to_msg(self.agent_id, step, pose, output.estimate),
             particle_xy=targets.states[keep][:, (0, 2)].astype(np.float32).ravel(),
             particle_weights=targets.weights[keep].astype(np.float32),
-            compute_time=compute_time)
+            yielded_to=output.left_overlap_with or 0, compute_time=compute_time)
 
 
 def main(args=None):

@@ -134,6 +134,11 @@ class PhdParams:
     # moves ~1 m/step and the agent up to 4 m/step, so 5 m keeps a tracked target in the region
     # for a step even when it leaves the square.
     extraction_margin: float = 5.0
+    # Track continuity of the state extraction: a target extracted at k-1 continues while the
+    # peak found within continue_gate of its predicted position x + v T keeps at least this
+    # much mass; new targets need round(mass) >= 1. TBD
+    continue_threshold: float = 0.2
+    continue_gate: float = 3.0
 
     def validate(self, prefix='phd'):
         _check(f'{prefix}.birth_rate', self.birth_rate, 0, 10)
@@ -146,6 +151,8 @@ class PhdParams:
         _check(f'{prefix}.min_particles', self.min_particles, 1, 1e7)
         _check(f'{prefix}.max_particles', self.max_particles, self.min_particles, 1e7)
         _check(f'{prefix}.extraction_margin', self.extraction_margin, 0, 100)
+        _check(f'{prefix}.continue_threshold', self.continue_threshold, 0, 0.5)
+        _check(f'{prefix}.continue_gate', self.continue_gate, 0, 100)
 
 
 @dataclass(frozen=True)

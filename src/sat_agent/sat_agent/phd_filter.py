@@ -31,6 +31,7 @@ unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the p
 """
 
 from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -65,7 +66,7 @@ class ParticlePHD:
 
 
 def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
-                   sensor: SensorParams) -> np.ndarray:
+                   sensor: SensorParams, explained: Optional[np.ndarray] = None) -> np.ndarray:
     """Return the corrected weights of Eqn. satphd_correct (true-target part).
 
     w_i <- [1 - p_D(x_i) + sum_z p_D(x_i) g(z | x_i) / (kappa(z) + tau(z))] w_i,
@@ -76,10 +77,15 @@ def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.nda
     g values far below float range do not underflow to 0 / 0. When kappa = 0 and no particle
     can have produced z (tau(z) = 0) the term is 0 / 0; it is taken as 0: z then says nothing
     about the existing particles (the measurement-driven birth accounts for it).
+
+    explained: optional (M,) output array, filled with tau(z) / (kappa(z) + tau(z)), the share
+    of each measurement the predicted targets explain (0 when no particle is in the square).
     """
     new_weights = np.array(weights, dtype=float, copy=True)
     inside = np.flatnonzero(sensor_model.in_sensing_square(
         motion_model.positions(states), pose, sensor.square_side))
+    if explained is not None:
+        explained[:] = 0.0
     if inside.size == 0:
         return new_weights
     w_in = new_weights[inside]
@@ -102,6 +108,8 @@ def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.nda
         inverse = np.divide(1.0, denominator, out=np.zeros_like(denominator),
                             where=denominator > 0.0)
         detected = p_d * (g_scaled @ inverse)
+        if explained is not None:
+            explained[:] = tau_scaled * inverse
     new_weights[inside] = w_in * ((1.0 - p_d) + detected)
     return new_weights
 
@@ -143,26 +151,39 @@ def uniform_births(params: SatParams, rng: np.random.Generator) -> ParticlePHD:
 
 
 def measurement_births(measurements: np.ndarray, pose, params: SatParams,
-                       rng: np.random.Generator) -> ParticlePHD:
-    """Measurement-driven part of b_{k+1} from Z_k (see the module docstring)."""
+                       rng: np.random.Generator,
+                       explained: Optional[np.ndarray] = None) -> ParticlePHD:
+    """Measurement-driven part of b_{k+1} from Z_k (see the module docstring).
+
+    explained: (M,) share tau / (kappa + tau) of each measurement already explained by the
+    targets (update_weights); a measurement only seeds the unexplained rest of its mass.
+    """
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     sensor = params.sensor
     per_z = params.phd.birth_particles_per_measurement
-    z = z[sensor_model.in_sensing_square(sensor_model.to_position(z, pose), pose,
-                                         sensor.square_side)]
+    unexplained = np.ones(len(z)) if explained is None else 1.0 - np.asarray(explained, float)
+    keep_z = sensor_model.in_sensing_square(sensor_model.to_position(z, pose), pose,
+                                            sensor.square_side)
+    z, unexplained = z[keep_z], unexplained[keep_z]
     if len(z) == 0 or per_z == 0 or params.phd.birth_mass_measurement == 0.0:
         return ParticlePHD.empty()
+    # Birth intensity uniform over the square's area: in measurement space its density grows
+    # with the range (dx dy = r dr dtheta) while the clutter's is flat, so a far measurement is
+    # more likely a new target than a near one; mass m_z = m_b (r / r_max) (1 - explained).
+    mass_z = (params.phd.birth_mass_measurement * np.minimum(z[:, 0] / sensor.max_range, 1.0)
+              * np.clip(unexplained, 0.0, 1.0))
     repeated = np.repeat(z, per_z, axis=0)
     sigma_r, sigma_b = sensor_model.measurement_sigmas(repeated[:, 0], sensor)
     noisy = repeated + rng.standard_normal(repeated.shape) * np.column_stack([sigma_r, sigma_b])
     points = sensor_model.to_position(noisy, pose)
     keep = sensor_model.in_sensing_square(points, pose, sensor.square_side)
+    keep &= np.repeat(mass_z > 0.0, per_z)
     count = int(keep.sum())
     states = np.empty((count, 4))
     states[:, motion_model.POSITION] = points[keep]
     states[:, motion_model.VELOCITY] = rng.normal(0.0, params.phd.birth_velocity_std, (count, 2))
-    weight = params.phd.birth_mass_measurement / (len(z) * per_z)
-    return ParticlePHD(states, np.full(count, weight))
+    weight = np.repeat(mass_z / per_z, per_z)[keep]
+    return ParticlePHD(states, weight)
 
 
 class SatPhdFilter:
@@ -195,8 +216,9 @@ class SatPhdFilter:
     def correct(self, measurements: np.ndarray, pose) -> None:
         """Eqn. satphd_correct: PHD update, search correction, births for k+1, resampling."""
         params = self.params
+        explained = np.zeros(len(np.asarray(measurements).reshape(-1, 2)))
         weights = update_weights(self.targets.states, self.targets.weights, measurements, pose,
-                                 params.sensor)
+                                 params.sensor, explained)
         # Newborns from the last scan that the new square does not cover cannot be confirmed or
         # killed; left alone they would pile up as unobservable ghost mass beside the square.
         newborn = self.targets.states[self._newborn]
@@ -205,5 +227,6 @@ class SatPhdFilter:
         weights[self._newborn.start + np.flatnonzero(untested)] = 0.0
         self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
         self.search.correct(pose, params.sensor)
-        self.pending_births = measurement_births(measurements, pose, params, self.rng)
+        self.pending_births = measurement_births(measurements, pose, params, self.rng,
+                                                 explained)
         self._newborn = slice(0, 0)

@@ -23,7 +23,7 @@ estimate. Each estimate carries its cluster's weighted mean velocity, its weight
 """
 
 from dataclasses import dataclass
-from typing import List, Tuple
+from typing import List, Optional, Tuple
 
 import numpy as np
 from scipy import ndimage
@@ -67,29 +67,62 @@ class MultiTargetEstimate:
         return np.array([target.position for target in self.targets])
 
 
-def extract_targets(phd: ParticlePHD, pose, params: SatParams) -> MultiTargetEstimate:
-    """Estimate the targets around pose (see the module docstring)."""
-    side = params.sensor.square_side + 2.0 * params.phd.extraction_margin
+def extract_targets(phd: ParticlePHD, pose, params: SatParams,
+                    previous: Optional[np.ndarray] = None) -> MultiTargetEstimate:
+    """Estimate the targets around pose (see the module docstring).
+
+    previous: (n, 2) positions where the targets extracted at the last step are expected now
+    (x + v T); a peak within ``phd.continue_gate`` of one of them continues that target while
+    its region keeps at least ``phd.continue_threshold`` of mass. None or empty: no target
+    continues, every estimate needs round(mass) >= 1 and a peak inside the sensing square.
+    """
+    phd_params = params.phd
+    side = params.sensor.square_side + 2.0 * phd_params.extraction_margin
     points = motion_model.positions(phd.states)
     region = sensor_model.in_sensing_square(points, pose, side)
     states, points, weights = phd.states[region], points[region], phd.weights[region]
     mass = float(weights.sum())
     origin = np.asarray(pose, dtype=float) - side / 2.0
+    expected = np.zeros((0, 2)) if previous is None else np.asarray(
+        previous, dtype=float).reshape(-1, 2)
+    open_tracks = np.ones(len(expected), dtype=bool)
+    # Below this no peak can give a target: new ones need 0.5, continued ones the lower bar.
+    floor = min(0.5, phd_params.continue_threshold) if len(expected) else 0.5
     unclaimed = weights > 0.0
     estimates: List[TargetEstimate] = []
     for _ in range(MAX_PEAKS):
-        if weights[unclaimed].sum() < 0.5:
+        if weights[unclaimed].sum() < floor:
             break
         peak = _mean_shift(points, weights, unclaimed,
                            _densest_cell(points[unclaimed], weights[unclaimed], origin, side))
         member = unclaimed & (np.hypot(*(points - peak).T) < PEAK_RADIUS)
         unclaimed &= ~member
-        count = int(np.floor(weights[member].sum() + 0.5))
+        peak_mass = weights[member].sum()
+        count = int(np.floor(peak_mass + 0.5))
+        track = _continued_track(peak, expected, open_tracks, phd_params.continue_gate)
+        if track is not None and (count >= 1 or peak_mass >= phd_params.continue_threshold):
+            open_tracks[track] = False
+            count = max(count, 1)
+        elif not sensor_model.in_sensing_square(peak[None], pose,
+                                                params.sensor.square_side)[0]:
+            # A new target needs its peak where the agent can see: mass beyond the square (no
+            # p_D there, Eqn. sensing_model) is never corrected and only decays with p_S.
+            count = 0
         if count == 1:
             estimates.append(_summarise(states[member], weights[member], peak))
         elif count > 1:
             estimates.extend(_split(states[member], points[member], weights[member], count))
     return MultiTargetEstimate(tuple(estimates), mass)
+
+
+def _continued_track(peak: np.ndarray, expected: np.ndarray, open_tracks: np.ndarray,
+                     gate: float) -> Optional[int]:
+    """Index of the nearest still open previous target within gate of peak, else None."""
+    if not open_tracks.any():
+        return None
+    gaps = np.where(open_tracks, np.hypot(*(expected - peak).T), np.inf)
+    nearest = int(np.argmin(gaps))
+    return nearest if gaps[nearest] <= gate else None
 
 
 def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,

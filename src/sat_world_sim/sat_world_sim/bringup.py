@@ -4,7 +4,8 @@ Starts, each as its own process running the installed executable (as ``ros2 run`
 ``world_sim`` (truth, sensors, radio), ``metrics`` (writes the run directory) and one ``agent``
 per scenario agent (or all agents in one ``agents_composed`` process with ``--composed``).
 Every process gets the same parameter file, a private ROS_DOMAIN_ID (unless one is given) and
-localhost-only discovery; their output is printed with a ``[name]`` prefix on stderr.
+localhost-only discovery; their output goes to ``<run-dir>/logs/<name>.log`` and (unless
+``--quiet``) to stderr with a ``[name]`` prefix.
 
 The run ends when ``metrics`` has written ``metrics.json``; then every process still running is
 stopped (SIGINT, then SIGKILL after a grace period). Ctrl-C stops everything the same way. The
@@ -55,12 +56,13 @@ class Child:
     respawns: int = 0
     pumps: List[threading.Thread] = field(default_factory=list)
 
-    def start(self, env: dict):
+    def start(self, env: dict, log_dir: Path, echo: bool):
         self.process = subprocess.Popen(self.command, env=env, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, bufsize=1,
                                         start_new_session=True)
-        pump = threading.Thread(target=_prefix_lines, args=(self.name, self.process.stdout),
-                                daemon=True)
+        log = open(log_dir / f'{self.name}.log', 'a', encoding='utf-8')
+        pump = threading.Thread(target=_prefix_lines,
+                                args=(self.name, self.process.stdout, log, echo), daemon=True)
         pump.start()
         self.pumps.append(pump)
 
@@ -83,9 +85,13 @@ class Child:
             self.process.wait()
 
 
-def _prefix_lines(name: str, stream):
-    for line in stream:
-        sys.stderr.write(f'[{name}] {line}')
+def _prefix_lines(name: str, stream, log, echo: bool):
+    """Copy a child's output into its log file and, with echo, to stderr with a prefix."""
+    with log:
+        for line in stream:
+            log.write(line)
+            if echo:
+                sys.stderr.write(f'[{name}] {line}')
     stream.close()
 
 
@@ -136,7 +142,8 @@ def build_children(args, agent_ids) -> List[Child]:
     return children
 
 
-def supervise(children: List[Child], env: dict, timeout: float) -> int:
+def supervise(children: List[Child], env: dict, timeout: float, log_dir: Path,
+              echo: bool) -> int:
     """Run until metrics exits (or a failure/timeout); return the bring-up's exit code."""
     by_name = {c.name: c for c in children}
     deadline = time.monotonic() + timeout
@@ -156,7 +163,7 @@ def supervise(children: List[Child], env: dict, timeout: float) -> int:
                 child.respawns += 1
                 print(f'[swarm] {child.name} exited ({code}): respawn {child.respawns}',
                       file=sys.stderr)
-                child.start(env)
+                child.start(env, log_dir, echo)
         if time.monotonic() > deadline:
             print(f'[swarm] timeout after {timeout} s', file=sys.stderr)
             return 1
@@ -182,6 +189,8 @@ def parse_args(argv):
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID (default: a private one for this run)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')
+    parser.add_argument('--quiet', action='store_true',
+                        help="only write the processes' output to <run-dir>/logs/, not stderr")
     return parser.parse_args(argv)
 
 
@@ -197,11 +206,13 @@ def main(argv=None) -> int:
     env = ros_env(args.domain_id)
     print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {len(scenario.agent_ids)} agents, "
           f'{args.clock}, run dir {args.run_dir}', file=sys.stderr)
+    log_dir = Path(args.run_dir) / 'logs'
+    log_dir.mkdir(parents=True, exist_ok=True)
     code = 1
     try:
         for child in children:
-            child.start(env)
-        code = supervise(children, env, args.timeout)
+            child.start(env, log_dir, not args.quiet)
+        code = supervise(children, env, args.timeout, log_dir, not args.quiet)
     except KeyboardInterrupt:
         print('[swarm] interrupted: stopping every process', file=sys.stderr)
         code = 130

@@ -90,8 +90,12 @@ def swarm_estimate(estimates: Mapping[int, np.ndarray], merge_distance: float) -
 
 
 def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
-                    config: MetricsConfig = MetricsConfig()) -> dict:
-    """Return the metrics.json dict (JSON-serialisable, deterministic) of a run's records."""
+                    config: MetricsConfig = MetricsConfig(), late_commands: int = 0) -> dict:
+    """Return the metrics.json dict (JSON-serialisable, deterministic) of a run's records.
+
+    late_commands: commands that missed their step (real-time clock; 0 in lock-step and in the
+    in-process swarm, where every agent answers every step).
+    """
     records = sorted(records, key=lambda r: r.step)
     steps = [_step_metrics(r, config) for r in records]
     return {
@@ -104,6 +108,7 @@ def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
         'targets': _target_metrics(records, config),
         'overlap_events': [dict(e) for r in records for e in r.overlap_events],
         'radio': _radio_metrics(records),
+        'late_commands': int(late_commands),
         'summary': _summary(steps),
     }
 

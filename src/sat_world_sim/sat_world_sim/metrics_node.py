@@ -84,7 +84,8 @@ class MetricsNode(Node):
                         if (i, step) in self.statuses}
             records.append(step_record(self.truths[step], statuses, self.traffic.get(step),
                                        self.traffic.get(step - 1)))
-        metrics = compute_metrics(records, self.final.scenario, self.final.seed)
+        metrics = compute_metrics(records, self.final.scenario, self.final.seed,
+                                  late_commands=self.final.late_commands)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         write_metrics(metrics, self.run_dir / 'metrics.json')
         densities = [density_values(m) for m in self.densities.values()]

@@ -6,7 +6,7 @@ A scenario is a YAML mapping (see ``config/scenarios/paper.yaml`` and ``random.y
     seed: 1                # seed of the ground truth, the sensors and the agents
     steps: 200             # steps k = 1 .. steps
     truth_process_noise: 1.0e-4   # scale of the paper's Q for the true targets
-    agents:                # one entry per agent, ids unique and >= 0
+    agents:                # one entry per agent, ids unique and >= 1
       - {id: 1, start: [10.0, 60.0]}
     targets:               # scripted targets (optional)
       - {id: 1, born: 104, died: 179, start: [50.0, 69.0], end: [80.0, 31.0]}
@@ -193,7 +193,8 @@ def _agents(value: Any, area) -> Tuple[AgentStart, ...]:
     for index, entry in enumerate(entries):
         where = f'agents[{index}]'
         _required(where, entry, _AGENT_KEYS)
-        agents.append(AgentStart(_integer(f'{where}.id', entry['id'], 0, 10 ** 6),
+        # Ids start at 1: messages use agent id 0 for "none" (AgentStatus.yielded_to).
+        agents.append(AgentStart(_integer(f'{where}.id', entry['id'], 1, 10 ** 6),
                                  _point(f'{where}.start', entry['start'], area)))
     _unique_ids('agents', [a.agent_id for a in agents])
     return tuple(agents)

@@ -30,7 +30,7 @@ from geometry_msgs.msg import Vector3
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
-from sat_agent.agent_core import wire_bytes
+from sat_agent.agent_core import REPORT_KINDS, wire_bytes
 from sat_agent.msg_conversions import measurements_to_msg, point
 from sat_agent.node_runner import run_nodes, RunFinished
 from sat_agent.ros_params import declare_sat_params
@@ -42,8 +42,7 @@ from sat_world_sim.radio import Radio
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
-RADIO_KINDS = (('search_density', SearchDensity), ('estimate', MultiTargetEstimate),
-               ('mode', AgentMode))
+RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
 STEP_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 RADIO_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # /world/* are kept for late joiners (a logger started after the world) and read by every
@@ -93,6 +92,7 @@ class WorldSimNode(Node):
         self.ids = self.world.agent_ids
         self.active = set(self.ids)
         self.refused = Counter()
+        self.late_commands = 0
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
         self._deadline = None
@@ -158,6 +158,7 @@ class WorldSimNode(Node):
             return
         if self.clock == 'real_time':
             if now >= self._deadline:
+                self.late_commands += len(self.active - set(self._cmds))
                 self._finish_step()
         elif now >= self._deadline:
             silent = sorted(i for i in self.active if not self._answered(i))
@@ -260,7 +261,8 @@ class WorldSimNode(Node):
     def _step_msg(self, k: int, finished: bool) -> WorldStep:
         scenario = self.world.scenario
         return WorldStep(step=k, total_steps=self.total_steps, clock=CLOCKS[self.clock],
-                         finished=finished, scenario=scenario.name, seed=scenario.seed)
+                         finished=finished, scenario=scenario.name, seed=scenario.seed,
+                         late_commands=self.late_commands)
 
     def _truth_msg(self, k: int, poses) -> GroundTruth:
         truth = self.world.truth()
