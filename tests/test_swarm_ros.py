@@ -104,8 +104,8 @@ def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, r
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
-def test_paper_scenario_through_the_ros_graph(tmp_path):
-    code, metrics, output = run_swarm(tmp_path / 'run', PAPER)
+def test_paper_scenario_through_the_ros_graph(paper_run):
+    run_dir, code, metrics, output = paper_run
     assert code == 0, output[-3000:]
     steps = metrics['steps']
     assert [s['step'] for s in steps] == list(range(1, 201))
@@ -119,7 +119,7 @@ def test_paper_scenario_through_the_ros_graph(tmp_path):
     assert np.mean([s['ospa'] for s in tracking]) <= 3.0
     # One tracks while the other searches.
     assert any(sorted(s['modes'].values()) == ['SEARCH', 'TRACK'] for s in tracking)
-    plots = sorted(p.name for p in (tmp_path / 'run' / 'plots').glob('*.png'))
+    plots = sorted(p.name for p in (run_dir / 'plots').glob('*.png'))
     assert plots == ['cardinality.png', 'ospa.png', 'searched.png', 'trajectories.png']
 
 

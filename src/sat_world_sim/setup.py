@@ -28,6 +28,8 @@ setup(
         'console_scripts': [
             'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
             'metrics = sat_world_sim.metrics_node:main',
+            'recorder = sat_world_sim.recorder_node:main',
+            'replay = sat_world_sim.bag_replay:main',
             'swarm = sat_world_sim.bringup:main',
             'world_sim = sat_world_sim.world_sim_node:main',
         ],

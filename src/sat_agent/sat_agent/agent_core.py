@@ -32,7 +32,7 @@ made alone from its current state; leaving radio range does not replan (the memb
 walks of the joint plan, as in the paper).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import List, Optional, Sequence
 
 import numpy as np
@@ -44,7 +44,7 @@ from sat_agent.phd_filter import SatPhdFilter
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import SearchMap
 from sat_agent.search_planning import ReplanReason, search_action, SearchPlanner
-from sat_agent.state_extraction import extract_targets, MultiTargetEstimate
+from sat_agent.state_extraction import extract_targets, MultiTargetEstimate, TargetEstimate
 from sat_agent.tracking_control import tracking_action
 from sat_agent.tracking_overlap import OverlapMonitor
 
@@ -123,11 +123,11 @@ class AgentOutput:
     replan: ReplanReason = ReplanReason.NONE
 
 
-def _predicted_positions(estimate: MultiTargetEstimate, dt: float) -> np.ndarray:
+def _predicted_positions(targets: Sequence[TargetEstimate], dt: float) -> np.ndarray:
     """(n, 2) positions x + v T of the estimated targets one step ahead."""
-    if not estimate.targets:
+    if not targets:
         return np.zeros((0, 2))
-    return np.array([t.position + dt * t.velocity for t in estimate.targets], dtype=float)
+    return np.array([t.position + dt * t.velocity for t in targets], dtype=float)
 
 
 class Agent:
@@ -152,6 +152,11 @@ class Agent:
         self.dropped_reports = 0
         self._previous_searchers: frozenset = frozenset()
         self._expected = np.zeros((0, 2))
+        self._candidates = (np.zeros((0, 2)), np.zeros(0, dtype=int))
+        # Investigation in SEARCH: steps spent on tentative peaks, the spots given up on.
+        self._investigated = 0
+        self._abandoned: list = []
+        self._look: tuple = ()
         # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
         self.filter.predict(np.asarray(initial_pose, dtype=float))
 
@@ -167,10 +172,13 @@ class Agent:
         reports = self._valid_reports(step, inbox)
         self.filter.correct(measurements, pose)
         estimate = extract_targets(self.filter.targets, pose, self.params,
-                                   previous=self._expected)
-        # Where this step's targets should be at k+1 (x + v T): the track-continuity gate of
-        # the next extraction (state_extraction's module docstring).
-        self._expected = _predicted_positions(estimate, self.params.motion.dt)
+                                   previous=self._expected, candidates=self._candidates)
+        # Where this step's targets and heavy tentative peaks should be at k+1 (x + v T): the
+        # track-continuity and confirmation gates of the next extraction (state_extraction).
+        dt = self.params.motion.dt
+        self._expected = _predicted_positions(estimate.targets, dt)
+        self._candidates = (_predicted_positions(estimate.tentative, dt),
+                            np.array(estimate.tentative_streaks, dtype=int))
         for report in reports:
             self.filter.search.fuse(report.search_values)
         searchers = self._searchers(reports)
@@ -186,19 +194,60 @@ class Agent:
         report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
                              self.filter.search.values.astype(np.float32), estimate)
         self.filter.predict(pose)
-        if mode == Mode.SEARCH:
+        look = self._investigation(mode, estimate)
+        if look is not None:
+            action, _ = tracking_action(self.filter.targets, look, pose, self.params)
+            goal = candidate_poses(pose, self.params.actions)[action]
+            plan = self.planner.walk_points()
+        elif mode == Mode.SEARCH:
             goal = self._search_goal(pose)
             action = search_action(pose, goal, self.params)
             plan = self.planner.walk_points()
         else:
             predicted = extract_targets(self.filter.targets, pose, self.params,
-                                        previous=self._expected)
+                                        previous=self._expected, candidates=self._candidates)
             action, _ = tracking_action(self.filter.targets, predicted, pose, self.params)
             goal = candidate_poses(pose, self.params.actions)[action]
             plan = np.zeros((0, 2))
         self._last_report = report
         return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
                            mode, leaving_for, replan)
+
+    def _investigation(self, mode: Mode, estimate: MultiTargetEstimate):
+        """Tentative peaks to look at from SEARCH (X-hat_{k+1|k} of them), or None.
+
+        A design choice the paper leaves open: one pass of a searching agent gives a target
+        2-3 scans, too few to confirm it under lambda = 10 clutter (a tracked target's PHD mass
+        grows by ~1 + g/kappa per scan, and not at all while the agent flies over it). So a
+        searching agent that sees an unconfirmed peak holds its walk for up to
+        ``search.investigate_steps`` steps and places itself with the tracking control (Eqn.
+        track_control, with its stand-off) on the tentative peaks; a target then reaches
+        round(mass) = 1 twice and the agent enters TRACK, a clutter cloud fades and the walk
+        resumes. One spot at a time, the heaviest; the spot of a spent budget is abandoned:
+        tentative peaks near it are ignored for 2 * investigate_steps steps.
+        """
+        budget = self.params.search.investigate_steps
+        gate = self.params.phd.continue_gate
+        self._abandoned = [(p, t - 1) for p, t in self._abandoned if t > 1]
+        if mode != Mode.SEARCH or self.modes.cooldown_left > 0 or budget == 0:
+            self._investigated = 0
+            return None
+        fresh = tuple(t for t in estimate.tentative if not any(
+            np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
+        if fresh:
+            look = (max(fresh, key=lambda t: t.weight),)   # the heaviest spot first
+        elif self._investigated > 0:
+            look = self._look      # a peak can fade for a scan (a miss, a near pass): keep on
+        else:
+            return None
+        if self._investigated >= budget:
+            self._abandoned += [(t.position, 2 * budget) for t in look]
+            self._investigated = 0
+            return None
+        self._investigated += 1
+        dt = self.params.motion.dt
+        self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
+        return MultiTargetEstimate(self._look, 0.0)
 
     def _valid_reports(self, step: int, inbox: Sequence[AgentReport]) -> List[AgentReport]:
         """Keep the well-formed reports of step k-1 from other agents, one per sender, by id."""

@@ -5,14 +5,12 @@ Run one per agent in its own namespace::
     ros2 run sat_agent agent --ros-args -r __ns:=/agent_3 -p agent_id:=3 \
         --params-file config/paper.yaml
 
-Topics (relative, so under the namespace) and their QoS:
+Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
 
-- ``measurements`` (sub, MeasurementSet): reliable, keep last 10. One scan per step; losing one
-  would stall a lock-step run.
-- ``radio/in/{search_density,estimate,mode}`` (sub): reliable, keep last 100; the radio forwards
-  several senders' reports in a burst.
-- ``cmd`` (pub, ControlCommand), ``radio/out/*`` (pub): reliable, keep last 10 / 100.
-- ``status`` (pub, AgentStatus): reliable, keep last 10, for the logger and the recorder.
+- ``measurements`` (sub, MeasurementSet, STEP);
+- ``radio/in/{search_density,estimate,mode}`` (sub, RADIO);
+- ``cmd`` (pub, ControlCommand, STEP), ``radio/out/*`` (pub, RADIO);
+- ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder.
 
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
@@ -28,7 +26,6 @@ import time
 import numpy as np
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.utilities import remove_ros_args
 
 from sat_agent.actions import candidate_poses
@@ -36,13 +33,12 @@ from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
                                        point, report_from_msgs, report_to_msgs)
 from sat_agent.node_runner import run_nodes
+from sat_agent.qos import RADIO, STEP
 from sat_agent.ros_params import declare_required_int, declare_sat_params
 from sat_msgs.msg import (AgentMode, AgentStatus, ControlCommand, MeasurementSet,
                           MultiTargetEstimate, SearchDensity)
 
 RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
-STEP_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-RADIO_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 # Particles shown to the logger per step: enough to see the cloud, small on the wire.
 STATUS_PARTICLES = 300
 LOG_THROTTLE_S = 5.0
@@ -64,14 +60,14 @@ class AgentNode(Node):
         self._radio = {}              # (sender, step) -> {kind: msg}
         self._received_since_step = 0
 
-        self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP_QOS)
-        self.status_pub = self.create_publisher(AgentStatus, 'status', STEP_QOS)
-        self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO_QOS)
+        self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP)
+        self.status_pub = self.create_publisher(AgentStatus, 'status', STEP)
+        self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO)
                            for kind, cls in RADIO_KINDS}
-        self.create_subscription(MeasurementSet, 'measurements', self.on_measurements, STEP_QOS)
+        self.create_subscription(MeasurementSet, 'measurements', self.on_measurements, STEP)
         for kind, cls in RADIO_KINDS:
             self.create_subscription(cls, f'radio/in/{kind}',
-                                     lambda msg, kind=kind: self.on_radio(kind, msg), RADIO_QOS)
+                                     lambda msg, kind=kind: self.on_radio(kind, msg), RADIO)
         self.create_timer(0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
 

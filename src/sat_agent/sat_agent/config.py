@@ -139,6 +139,9 @@ class PhdParams:
     # much mass; new targets need round(mass) >= 1. TBD
     continue_threshold: float = 0.2
     continue_gate: float = 3.0
+    tentative_threshold: float = 0.15
+    peak_radius: float = 3.0
+    confirm_scans: int = 3
 
     def validate(self, prefix='phd'):
         _check(f'{prefix}.birth_rate', self.birth_rate, 0, 10)
@@ -153,6 +156,9 @@ class PhdParams:
         _check(f'{prefix}.extraction_margin', self.extraction_margin, 0, 100)
         _check(f'{prefix}.continue_threshold', self.continue_threshold, 0, 0.5)
         _check(f'{prefix}.continue_gate', self.continue_gate, 0, 100)
+        _check(f'{prefix}.tentative_threshold', self.tentative_threshold, 0, 0.5)
+        _check(f'{prefix}.peak_radius', self.peak_radius, 0, 100, low_open=True)
+        _check(f'{prefix}.confirm_scans', self.confirm_scans, 1, 100)
 
 
 @dataclass(frozen=True)
@@ -169,12 +175,15 @@ class SearchParams:
     # its region seen recently"; a fully searched region takes ln(0.5)/ln(0.999) ~ 693 steps to
     # need a revisit.
     unvisited_threshold: float = 0.5
+    # TBD investigate
+    investigate_steps: int = 4
 
     def validate(self, prefix='search'):
         _check(f'{prefix}.decay', self.decay, 0, 1)
         _check(f'{prefix}.lattice_spacing', self.lattice_spacing, 0, INF, low_open=True)
         _check(f'{prefix}.node_spacing', self.node_spacing, 0, INF, low_open=True)
         _check(f'{prefix}.unvisited_threshold', self.unvisited_threshold, 0, 1, high_open=True)
+        _check(f'{prefix}.investigate_steps', self.investigate_steps, 0, 10000)
 
 
 @dataclass(frozen=True)
@@ -195,6 +204,11 @@ class CooperationParams:
     # (up to 4 m/step of flight, far beyond the a/2 + extraction margin = 10 m it takes to get
     # the abandoned targets out of view).
     rejoin_cooldown: int = 10
+    # Tracking-control stand-off (tracking_control.py): keep targets this far from the agent
+    # (clutter is kappa / d per m^2, so detections closer than ~3 m carry little evidence) and
+    # this far inside the square's edge (a target walks ~1 m/step, the estimate errs ~1 m).
+    track_standoff: float = 3.0
+    track_edge_margin: float = 1.5
 
     def validate(self, prefix='cooperation'):
         _check(f'{prefix}.comm_range', self.comm_range, 0, INF)
@@ -204,6 +218,8 @@ class CooperationParams:
         _check(f'{prefix}.overlap_threshold', self.overlap_threshold, 0, INF)
         _check(f'{prefix}.track_timeout', self.track_timeout, 1, 10000)
         _check(f'{prefix}.rejoin_cooldown', self.rejoin_cooldown, 0, 10000)
+        _check(f'{prefix}.track_standoff', self.track_standoff, 0, INF)
+        _check(f'{prefix}.track_edge_margin', self.track_edge_margin, 0, INF)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ estimate. Each estimate carries its cluster's weighted mean velocity, its weight
 (the spread) and its PHD mass (weight). ``cardinality`` is the mass of the whole region.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -59,6 +59,11 @@ class MultiTargetEstimate:
 
     targets: Tuple[TargetEstimate, ...]
     cardinality: float
+    # Unconfirmed peaks inside the sensing square with at least phd.tentative_threshold of
+    # mass: not targets (not reported, not counted), only where the agent may look closer.
+    tentative: Tuple[TargetEstimate, ...] = field(default=(), compare=False)
+    # Per tentative peak: scans in a row with round(mass) >= 1 (0 for lighter peaks).
+    tentative_streaks: Tuple[int, ...] = field(default=(), compare=False)
 
     def positions(self) -> np.ndarray:
         """(n, 2) positions of the estimated targets."""
@@ -68,61 +73,88 @@ class MultiTargetEstimate:
 
 
 def extract_targets(phd: ParticlePHD, pose, params: SatParams,
-                    previous: Optional[np.ndarray] = None) -> MultiTargetEstimate:
+                    previous: Optional[np.ndarray] = None,
+                    candidates: Optional[np.ndarray] = None) -> MultiTargetEstimate:
     """Estimate the targets around pose (see the module docstring).
 
     previous: (n, 2) positions where the targets extracted at the last step are expected now
     (x + v T); a peak within ``phd.continue_gate`` of one of them continues that target while
     its region keeps at least ``phd.continue_threshold`` of mass. None or empty: no target
     continues, every estimate needs round(mass) >= 1 and a peak inside the sensing square.
+    candidates: (positions (m, 2), streaks (m,)) of the tentative peaks of k-1, positions
+    predicted to k. When given (not None), a peak with round(mass) >= 1 becomes a new target
+    only on its ``phd.confirm_scans``-th scan in a row with round(mass) >= 1 (its streak: one
+    more than the longest streak of a candidate within ``phd.continue_gate``); before that it
+    is a tentative peak with that streak. None: one scan is enough.
     """
     phd_params = params.phd
+    radius = phd_params.peak_radius
     side = params.sensor.square_side + 2.0 * phd_params.extraction_margin
     points = motion_model.positions(phd.states)
     region = sensor_model.in_sensing_square(points, pose, side)
     states, points, weights = phd.states[region], points[region], phd.weights[region]
     mass = float(weights.sum())
     origin = np.asarray(pose, dtype=float) - side / 2.0
-    expected = np.zeros((0, 2)) if previous is None else np.asarray(
-        previous, dtype=float).reshape(-1, 2)
-    open_tracks = np.ones(len(expected), dtype=bool)
-    # Below this no peak can give a target: new ones need 0.5, continued ones the lower bar.
-    floor = min(0.5, phd_params.continue_threshold) if len(expected) else 0.5
     unclaimed = weights > 0.0
     estimates: List[TargetEstimate] = []
+    # Track continuity first: each target of k-1 looks for its peak from where it should be.
+    for guess in np.zeros((0, 2)) if previous is None else np.asarray(
+            previous, dtype=float).reshape(-1, 2):
+        peak = _mean_shift(points, weights, unclaimed, guess, radius)
+        member = unclaimed & (np.hypot(*(points - peak).T) < radius)
+        peak_mass = weights[member].sum()
+        if (np.hypot(*(peak - guess)) > phd_params.continue_gate
+                or peak_mass < phd_params.continue_threshold):
+            continue
+        unclaimed &= ~member
+        # The PHD over-counts a tracked target under clutter (clutter points next to it add
+        # mass): a continued target splits in two only at a mass of 2, not 1.5.
+        estimates.extend(_estimates(states[member], points[member], weights[member], peak,
+                                    max(1, int(np.floor(peak_mass)))))
+    # New targets: round(mass) >= 1 around a peak inside the square; lighter peaks there with
+    # at least tentative_threshold are kept as tentative.
+    floor = min(0.5, phd_params.tentative_threshold)
+    tentative: List[TargetEstimate] = []
+    streaks: List[int] = []
     for _ in range(MAX_PEAKS):
         if weights[unclaimed].sum() < floor:
             break
         peak = _mean_shift(points, weights, unclaimed,
-                           _densest_cell(points[unclaimed], weights[unclaimed], origin, side))
-        member = unclaimed & (np.hypot(*(points - peak).T) < PEAK_RADIUS)
+                           _densest_cell(points[unclaimed], weights[unclaimed], origin, side),
+                           radius)
+        member = unclaimed & (np.hypot(*(points - peak).T) < radius)
         unclaimed &= ~member
         peak_mass = weights[member].sum()
+        if not sensor_model.in_sensing_square(peak[None], pose, params.sensor.square_side)[0]:
+            # Mass beyond the square (no p_D there, Eqn. sensing_model) is never corrected and
+            # only decays with p_S: it can continue a target but not make a new one.
+            continue
         count = int(np.floor(peak_mass + 0.5))
-        track = _continued_track(peak, expected, open_tracks, phd_params.continue_gate)
-        if track is not None and (count >= 1 or peak_mass >= phd_params.continue_threshold):
-            open_tracks[track] = False
-            count = max(count, 1)
-        elif not sensor_model.in_sensing_square(peak[None], pose,
-                                                params.sensor.square_side)[0]:
-            # A new target needs its peak where the agent can see: mass beyond the square (no
-            # p_D there, Eqn. sensing_model) is never corrected and only decays with p_S.
-            count = 0
-        if count == 1:
-            estimates.append(_summarise(states[member], weights[member], peak))
-        elif count > 1:
-            estimates.extend(_split(states[member], points[member], weights[member], count))
-    return MultiTargetEstimate(tuple(estimates), mass)
+        streak = _streak(peak, candidates, phd_params.continue_gate) if count >= 1 else 0
+        if count >= 1 and (candidates is None or streak >= phd_params.confirm_scans):
+            estimates.extend(_estimates(states[member], points[member], weights[member], peak,
+                                        count))
+        elif peak_mass >= phd_params.tentative_threshold:
+            tentative.append(_summarise(states[member], weights[member], peak))
+            streaks.append(streak)
+    return MultiTargetEstimate(tuple(estimates), mass, tuple(tentative), tuple(streaks))
 
 
-def _continued_track(peak: np.ndarray, expected: np.ndarray, open_tracks: np.ndarray,
-                     gate: float) -> Optional[int]:
-    """Index of the nearest still open previous target within gate of peak, else None."""
-    if not open_tracks.any():
-        return None
-    gaps = np.where(open_tracks, np.hypot(*(expected - peak).T), np.inf)
-    nearest = int(np.argmin(gaps))
-    return nearest if gaps[nearest] <= gate else None
+def _streak(peak: np.ndarray, candidates, gate: float) -> int:
+    """Scans in a row with round(mass) >= 1 at this peak, this one included."""
+    if candidates is None or len(candidates[0]) == 0:
+        return 1
+    positions = np.asarray(candidates[0], dtype=float).reshape(-1, 2)
+    near = np.hypot(*(positions - peak).T) <= gate
+    return 1 + int(np.max(np.asarray(candidates[1])[near], initial=0))
+
+
+def _estimates(states: np.ndarray, points: np.ndarray, weights: np.ndarray, peak: np.ndarray,
+               count: int) -> List[TargetEstimate]:
+    """One estimate at the peak, or count of them by a weighted k-means of the region."""
+    if count == 1:
+        return [_summarise(states, weights, peak)]
+    return _split(states, points, weights, count)
 
 
 def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,
@@ -138,10 +170,10 @@ def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,
 
 
 def _mean_shift(points: np.ndarray, weights: np.ndarray, active: np.ndarray,
-                center: np.ndarray) -> np.ndarray:
+                center: np.ndarray, radius: float) -> np.ndarray:
     """Move center to the weighted mean of the active particles within PEAK_RADIUS, repeatedly."""
     for _ in range(MEAN_SHIFT_STEPS):
-        near = active & (np.hypot(*(points - center).T) < PEAK_RADIUS)
+        near = active & (np.hypot(*(points - center).T) < radius)
         total = weights[near].sum()
         if total <= 0.0:
             break

@@ -10,6 +10,16 @@ D_hat_k(u), and the score is the Renyi divergence between the two Poisson multi-
 
 in particle form (both densities share the particles, D_hat = f D):
     xi(u) = sum w + alpha / (1 - alpha) sum w_hat - 1 / (1 - alpha) sum w^(1 - alpha) w_hat^alpha.
+
+Stand-off (a choice the paper leaves open): the argmax runs over the admissible actions that
+keep every predicted target at least ``cooperation.track_standoff`` from the agent and
+``cooperation.track_edge_margin`` inside the square (all admissible actions when none does).
+Under lambda = 10 clutter, uniform in [range, bearing], the clutter density in the plane is
+kappa / d per m^2: next to the agent a detection is barely distinguishable from clutter (and
+sigma_r = 1 m while the bearing says nothing in metres), so the Renyi score of the ideal
+measurement set, which ignores clutter realisations, would put the agent on top of the target
+where the real updates carry the least information; and a target near the edge is lost at the
+next step. Among the remaining actions the Renyi divergence decides, as in Eqn. track_control.
 """
 
 import numpy as np
@@ -54,6 +64,8 @@ def tracking_action(predicted: ParticlePHD, estimates: MultiTargetEstimate, pose
     sensor = params.sensor
     poses = actions.candidate_poses(pose, params.actions)
     allowed = actions.admissible_mask(pose, params.actions, params.area)
+    allowed &= _standoff_mask(poses, estimates.positions(), params) | ~np.any(
+        allowed & _standoff_mask(poses, estimates.positions(), params))
     # Only particles some candidate square can see take part: the others keep their weight
     # under every action and add exactly 0 to every score.
     reach = sensor.square_side + 2.0 * float(np.max(np.abs(poses - np.asarray(pose, float))))
@@ -66,3 +78,14 @@ def tracking_action(predicted: ParticlePHD, estimates: MultiTargetEstimate, pose
         posterior = update_weights(states, weights, z, poses[action], sensor)
         scores[action] = renyi_divergence(weights, posterior, alpha)
     return int(np.argmax(scores)), scores
+
+
+def _standoff_mask(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> np.ndarray:
+    """Actions keeping every target within [standoff, a / 2 - edge margin] of the agent."""
+    if len(targets) == 0:
+        return np.ones(len(poses), dtype=bool)
+    offset = np.abs(targets[None, :, :] - poses[:, None, :])           # (U, n, 2)
+    inner = params.sensor.square_side / 2.0 - params.cooperation.track_edge_margin
+    in_square = np.max(offset, axis=2) <= inner
+    far_enough = np.hypot(offset[..., 0], offset[..., 1]) >= params.cooperation.track_standoff
+    return np.all(in_square & far_enough, axis=1)

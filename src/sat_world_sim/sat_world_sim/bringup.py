@@ -1,8 +1,9 @@
 """Bring up a whole swarm as separate OS processes and wait for the run to finish.
 
 Starts, each as its own process running the installed executable (as ``ros2 run`` would):
-``world_sim`` (truth, sensors, radio), ``metrics`` (writes the run directory) and one ``agent``
-per scenario agent (or all agents in one ``agents_composed`` process with ``--composed``).
+``world_sim`` (truth, sensors, radio), ``metrics`` (metrics.json and plots), ``recorder`` (every
+topic into ``<run-dir>/bag``, unless ``--no-record``) and one ``agent`` per scenario agent (or
+all agents in one ``agents_composed`` process with ``--composed``).
 Every process gets the same parameter file, a private ROS_DOMAIN_ID (unless one is given) and
 localhost-only discovery; their output goes to ``<run-dir>/logs/<name>.log`` and (unless
 ``--quiet``) to stderr with a ``[name]`` prefix.
@@ -52,6 +53,8 @@ class Child:
     name: str
     command: List[str]
     respawn: bool = False
+    # Observers (metrics, recorder, logger) end the run: it is over when they all exited.
+    observer: bool = False
     process: Optional[subprocess.Popen] = None
     respawns: int = 0
     pumps: List[threading.Thread] = field(default_factory=list)
@@ -114,21 +117,22 @@ def build_children(args, agent_ids) -> List[Child]:
     """Return the processes of one run (module docstring)."""
     params = ['--params-file', str(Path(args.params).resolve())]
     ids = '[' + ','.join(str(i) for i in agent_ids) + ']'
+    run_dir = ['-p', f'run_dir:={Path(args.run_dir).resolve()}', '-p', f'agent_ids:={ids}']
+    observers = [Child('metrics', [executable('sat_world_sim', 'metrics'), '--ros-args',
+                                   *params, *run_dir], observer=True)]
+    if not args.no_record:
+        observers.append(Child('recorder', [executable('sat_world_sim', 'recorder'),
+                                            '--ros-args', *run_dir], observer=True))
     world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *params,
              '-p', f'scenario:={Path(args.scenario).resolve()}', '-p', f'clock:={args.clock}',
              '-p', f'period:={args.period}', '-p', f'agent_timeout:={args.agent_timeout}',
-             '-p', 'observers:=1', '-p', f'radio.loss:={args.radio_loss}',
+             '-p', f'observers:={len(observers)}', '-p', f'radio.loss:={args.radio_loss}',
              '-p', f'radio.delay_steps:={args.radio_delay}']
     if args.seed is not None:
         world += ['-p', f'seed:={args.seed}']
     if args.steps is not None:
         world += ['-p', f'steps:={args.steps}']
-    children = [
-        Child('world_sim', world),
-        Child('metrics', [executable('sat_world_sim', 'metrics'), '--ros-args', *params,
-                          '-p', f'run_dir:={Path(args.run_dir).resolve()}',
-                          '-p', f'agent_ids:={ids}']),
-    ]
+    children = [Child('world_sim', world), *observers]
     seed = ['-p', f'seed:={args.seed if args.seed is not None else 0}']
     if args.composed:
         children.append(Child('agents', [executable('sat_agent', 'agents_composed'), '--ids',
@@ -144,22 +148,26 @@ def build_children(args, agent_ids) -> List[Child]:
 
 def supervise(children: List[Child], env: dict, timeout: float, log_dir: Path,
               echo: bool) -> int:
-    """Run until metrics exits (or a failure/timeout); return the bring-up's exit code."""
+    """Run until every observer exited (or a failure/timeout); return the exit code."""
     by_name = {c.name: c for c in children}
+    observers = [c for c in children if c.observer]
     deadline = time.monotonic() + timeout
     while True:
-        metrics_code = by_name['metrics'].poll()
-        if metrics_code is not None:
-            return 0 if metrics_code == 0 else 1
+        codes = [c.poll() for c in observers]
+        if all(code is not None for code in codes):
+            failed = [c.name for c, code in zip(observers, codes) if code != 0]
+            if failed:
+                print(f'[swarm] {failed} failed', file=sys.stderr)
+            return 1 if failed else 0
         world_code = by_name['world_sim'].poll()
         if world_code not in (None, 0):
             print(f'[swarm] world_sim failed with exit code {world_code}', file=sys.stderr)
             return 1
         for child in children:
             code = child.poll()
-            if code is None or child.name in ('world_sim', 'metrics'):
+            if code is None or not child.respawn:
                 continue
-            if child.respawn and child.respawns < MAX_RESPAWNS:
+            if child.respawns < MAX_RESPAWNS:
                 child.respawns += 1
                 print(f'[swarm] {child.name} exited ({code}): respawn {child.respawns}',
                       file=sys.stderr)
@@ -186,6 +194,7 @@ def parse_args(argv):
     parser.add_argument('--composed', action='store_true',
                         help='all agents in one process (one executor)')
     parser.add_argument('--respawn', action='store_true', help='restart crashed agents')
+    parser.add_argument('--no-record', action='store_true', help='do not record a bag')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID (default: a private one for this run)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')

@@ -5,11 +5,14 @@ metrics node and the offline replay of a bag build their records with these same
 metrics computed either way are equal.
 """
 
-from typing import Mapping, Optional
+from pathlib import Path
+from typing import List, Mapping, Optional, Sequence
 
 import numpy as np
 
-from sat_world_sim.metrics import StepRecord
+from sat_world_sim.metrics import compute_metrics, StepRecord, write_metrics
+from sat_world_sim.plots import write_plots
+from sat_world_sim.topics import agent_of
 
 MODE_NAMES = {0: 'SEARCH', 1: 'TRACK'}
 
@@ -59,3 +62,76 @@ def density_values(msg) -> Optional[np.ndarray]:
     """(height, width) values of a SearchDensity message."""
     values = np.asarray(msg.values, dtype=float)
     return values.reshape(int(msg.grid.height), int(msg.grid.width))
+
+
+class RunCollector:
+    """Gathers one run's messages by topic and turns them into metrics.json and plots.
+
+    Fed by the live metrics node and by the offline replay of a bag alike (``add(topic, msg)``
+    with the graph's topic names), so both compute metrics with the same code.
+    """
+
+    def __init__(self, agent_ids):
+        self.agent_ids = sorted(int(i) for i in agent_ids)
+        self.truths, self.traffic, self.statuses, self.densities = {}, {}, {}, {}
+        self.final = None   # the world's last WorldStep (finished = True)
+
+    def add(self, topic: str, msg) -> None:
+        """Take one message of the graph; topics it does not use are ignored."""
+        if topic == '/world/step':
+            if msg.finished:
+                self.final = msg
+        elif topic == '/world/truth':
+            self.truths[int(msg.step)] = msg
+        elif topic == '/world/radio':
+            self.traffic[int(msg.step)] = msg
+        else:
+            owner = agent_of(topic)
+            if owner is None or owner[0] not in self.agent_ids:
+                return
+            if owner[1] == 'status':
+                self.statuses[(owner[0], int(msg.step))] = msg
+            elif owner[1] == 'radio/out/search_density':
+                self.densities[owner[0]] = msg
+
+    def complete(self) -> bool:
+        """Whether the run finished and its last step's truth, traffic and statuses are in."""
+        if self.final is None:
+            return False
+        last = int(self.final.step)
+        truth = self.truths.get(last)
+        if truth is None or last not in self.traffic:
+            return False
+        return all((int(a.id), last) in self.statuses for a in truth.agents
+                   if a.active and int(a.id) in self.agent_ids)
+
+    def records(self) -> List[StepRecord]:
+        """One StepRecord per step that has ground truth."""
+        return [step_record(self.truths[step],
+                            {i: self.statuses[(i, step)] for i in self.agent_ids
+                             if (i, step) in self.statuses},
+                            self.traffic.get(step), self.traffic.get(step - 1))
+                for step in sorted(self.truths)]
+
+    def metrics(self, records: Sequence[StepRecord]) -> dict:
+        """Return the metrics.json dict of the run."""
+        final = self.final
+        return compute_metrics(records, final.scenario if final else '',
+                               int(final.seed) if final else 0,
+                               late_commands=int(final.late_commands) if final else 0)
+
+    def fused_density(self) -> Optional[np.ndarray]:
+        """Elementwise max of the last search density each agent sent."""
+        values = [density_values(m) for _, m in sorted(self.densities.items())]
+        return np.maximum.reduce(values) if values else None
+
+    def write(self, run_dir, area) -> dict:
+        """Write <run_dir>/metrics.json and <run_dir>/plots/*.png; return the metrics."""
+        run_dir = Path(run_dir)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        records = self.records()
+        metrics = self.metrics(records)
+        write_metrics(metrics, run_dir / 'metrics.json')
+        write_plots(metrics, records, run_dir / 'plots', area=area,
+                    final_density=self.fused_density())
+        return metrics

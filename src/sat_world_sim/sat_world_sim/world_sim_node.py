@@ -28,11 +28,11 @@ import time
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from sat_agent.agent_core import REPORT_KINDS, wire_bytes
 from sat_agent.msg_conversions import measurements_to_msg, point
 from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
 from sat_msgs.msg import (AgentMode, AgentTruth, ControlCommand, GroundTruth, MeasurementSet,
                           MultiTargetEstimate, RadioTraffic, SearchDensity, TargetTruth,
@@ -43,12 +43,6 @@ from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
 RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
-STEP_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
-RADIO_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-# /world/* are kept for late joiners (a logger started after the world) and read by every
-# observer; depth covers a few steps of slow subscribers.
-WORLD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE,
-                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
 LOG_THROTTLE_S = 5.0
 DISCOVERY_SETTLE_S = 0.5
@@ -100,22 +94,22 @@ class WorldSimNode(Node):
         self._ready_since = None
         self._finished_at = None
 
-        self.step_pub = self.create_publisher(WorldStep, '/world/step', WORLD_QOS)
-        self.truth_pub = self.create_publisher(GroundTruth, '/world/truth', WORLD_QOS)
-        self.traffic_pub = self.create_publisher(RadioTraffic, '/world/radio', WORLD_QOS)
+        self.step_pub = self.create_publisher(WorldStep, '/world/step', WORLD)
+        self.truth_pub = self.create_publisher(GroundTruth, '/world/truth', WORLD)
+        self.traffic_pub = self.create_publisher(RadioTraffic, '/world/radio', WORLD)
         self.scan_pubs, self.inbox_pubs = {}, {}
         for i in self.ids:
             ns = f'/agent_{i}'
             self.scan_pubs[i] = self.create_publisher(MeasurementSet, f'{ns}/measurements',
-                                                      STEP_QOS)
+                                                      STEP)
             self.create_subscription(ControlCommand, f'{ns}/cmd',
-                                     lambda msg, i=i: self.on_cmd(i, msg), STEP_QOS)
+                                     lambda msg, i=i: self.on_cmd(i, msg), STEP)
             for kind, cls in RADIO_KINDS:
                 self.inbox_pubs[(i, kind)] = self.create_publisher(
-                    cls, f'{ns}/radio/in/{kind}', RADIO_QOS)
+                    cls, f'{ns}/radio/in/{kind}', RADIO)
                 self.create_subscription(
                     cls, f'{ns}/radio/out/{kind}',
-                    lambda msg, i=i, kind=kind: self.on_report(i, kind, msg), RADIO_QOS)
+                    lambda msg, i=i, kind=kind: self.on_report(i, kind, msg), RADIO)
         self._launched = time.monotonic()
         self.create_timer(0.02, self._tick)
         self.get_logger().info(
