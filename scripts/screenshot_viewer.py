@@ -235,24 +235,20 @@ def main(argv=None) -> int:
                         str(recording)], env=env, check=True, stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL)
         default_blueprint(args.agents, args.area, play_state='paused').save(APPLICATION_ID, str(blueprint))
-        files = serve_files({'run.rrd': recording, 'layout.rbl': blueprint})
         server = subprocess.Popen(
             [*rerun_command(), '--serve-web', '--bind', '127.0.0.1', '--port', str(grpc_port),
-             '--web-viewer-port', str(web_port)],
+             '--web-viewer-port', str(web_port), str(recording), str(blueprint)],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             start_new_session=True)
         try:
             wait_http(f'http://127.0.0.1:{web_port}/', 60, server)
-            base = f'http://127.0.0.1:{files.server_address[1]}'
-            data = urllib.parse.quote(f'{base}/run.rrd#when=step@{args.step}', safe='')
-            layout = urllib.parse.quote(f'{base}/layout.rbl', safe='')
-            url = f'http://127.0.0.1:{web_port}/?url={data}&url={layout}'
+            data = urllib.parse.quote(
+                f'rerun+http://127.0.0.1:{grpc_port}/proxy#when=step@{args.step}', safe='')
+            url = f'http://127.0.0.1:{web_port}/?url={data}'
             print(f'screenshot_viewer: {url}', flush=True)
             screenshot(chromium, url, args.out, size, args.wait, tmp / 'chromium-profile')
         finally:
             stop(server)
-            files.shutdown()
-            files.server_close()
     print(f'screenshot_viewer: wrote {args.out} ({args.out.stat().st_size} bytes)')
     return 0
 

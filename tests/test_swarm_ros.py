@@ -16,6 +16,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from ros_harness import executable, PARAMS, REPO, run_swarm, started, write_scenario
 
 from sat_msgs.msg import AgentStatus, SearchDensity, WorldStep
+from sat_world_sim.observer import ReadyAnnouncer
 
 pytestmark = pytest.mark.ros
 RELIABLE = QoSProfile(depth=300, reliability=ReliabilityPolicy.RELIABLE)
@@ -44,16 +45,18 @@ class Observer:
         self.steps, self.finished = [], False
         self.status = {}         # (agent, step) -> AgentStatus
         self.density = {}        # (agent, step) -> (ny, nx) values sent
-        node.create_subscription(WorldStep, '/world/step', self.on_step, WORLD)
+        subscriptions = [node.create_subscription(WorldStep, '/world/step', self.on_step, WORLD)]
         for i in agent_ids:
-            node.create_subscription(AgentStatus, f'/agent_{i}/status',
-                                     lambda m, i=i: self.status.__setitem__((i, m.step), m),
-                                     RELIABLE)
-            node.create_subscription(
+            subscriptions.append(node.create_subscription(
+                AgentStatus, f'/agent_{i}/status',
+                lambda m, i=i: self.status.__setitem__((i, m.step), m), RELIABLE))
+            subscriptions.append(node.create_subscription(
                 SearchDensity, f'/agent_{i}/radio/out/search_density',
                 lambda m, i=i: self.density.__setitem__(
                     (i, m.step), np.asarray(m.values).reshape(m.grid.height, m.grid.width)),
-                RELIABLE)
+                RELIABLE))
+        # world_sim starts step 1 once this observer says it sees every topic.
+        self.ready = ReadyAnnouncer(node, subscriptions)
 
     def on_step(self, msg):
         self.steps.append((time.monotonic(), msg.step))

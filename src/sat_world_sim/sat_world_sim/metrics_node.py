@@ -16,6 +16,7 @@ from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
+from sat_world_sim.observer import ReadyAnnouncer
 from sat_world_sim.records import RunCollector
 
 # After the world says "finished", wait at most this long for the last statuses.
@@ -35,14 +36,16 @@ class MetricsNode(Node):
         agent_ids = list(self.declare_parameter('agent_ids', [1, 2]).value)
         self.collector = RunCollector(agent_ids)
         self._finished_at = None
-        for topic, cls, qos in [('/world/step', WorldStep, WORLD),
-                                ('/world/truth', GroundTruth, WORLD),
-                                ('/world/radio', RadioTraffic, WORLD)] + [
-                (f'/agent_{i}/status', AgentStatus, STEP) for i in agent_ids] + [
-                (f'/agent_{i}/radio/out/search_density', SearchDensity, RADIO)
-                for i in agent_ids]:
+        topics = [('/world/step', WorldStep, WORLD), ('/world/truth', GroundTruth, WORLD),
+                  ('/world/radio', RadioTraffic, WORLD)]
+        for i in agent_ids:
+            topics += [(f'/agent_{i}/status', AgentStatus, STEP),
+                       (f'/agent_{i}/radio/out/search_density', SearchDensity, RADIO)]
+        subscriptions = [
             self.create_subscription(cls, topic,
                                      lambda msg, topic=topic: self.collector.add(topic, msg), qos)
+            for topic, cls, qos in topics]
+        self.ready = ReadyAnnouncer(self, subscriptions)
         self.create_timer(0.1, self._tick)
 
     def _tick(self):

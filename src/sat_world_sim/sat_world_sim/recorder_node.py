@@ -20,6 +20,7 @@ from sat_agent.node_runner import run_nodes, RunFinished
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
+from sat_world_sim.observer import ReadyAnnouncer
 from sat_world_sim.replay_support import message_class, topic_qos
 from sat_world_sim.topics import graph_topics
 
@@ -55,14 +56,16 @@ class RecorderNode(Node):
         self.writer.open()
         self.count = 0
         self._finished_at = None
+        subscriptions = []
         for topic in graph_topics(agent_ids):
             qos = topic_qos(topic)
             connection = self.writer.add_connection(topic.name, topic.msgtype, typestore=store,
                                                     offered_qos_profiles=[bag_qos(qos)])
-            self.create_subscription(
+            subscriptions.append(self.create_subscription(
                 message_class(topic.msgtype), topic.name,
                 lambda data, c=connection, name=topic.name: self._write(c, name, data),
-                qos, raw=True)
+                qos, raw=True))
+        self.ready = ReadyAnnouncer(self, subscriptions)
         self.create_timer(0.2, self._tick)
 
     def _write(self, connection, name: str, data: bytes):

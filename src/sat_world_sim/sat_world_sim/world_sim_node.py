@@ -28,6 +28,7 @@ import time
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
 from rclpy.node import Node
+from std_msgs.msg import String
 
 from sat_agent.agent_core import REPORT_KINDS, wire_bytes
 from sat_agent.msg_conversions import measurements_to_msg, point
@@ -38,6 +39,7 @@ from sat_msgs.msg import (AgentMode, AgentTruth, ControlCommand, GroundTruth, Me
                           MultiTargetEstimate, RadioTraffic, SearchDensity, TargetTruth,
                           WorldStep)
 
+from sat_world_sim import observer
 from sat_world_sim.radio import Radio
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
@@ -92,6 +94,7 @@ class WorldSimNode(Node):
         self._deadline = None
         self._started = False
         self._ready_since = None
+        self._observers_ready = set()
         self._finished_at = None
 
         self.step_pub = self.create_publisher(WorldStep, '/world/step', WORLD)
@@ -110,6 +113,8 @@ class WorldSimNode(Node):
                 self.create_subscription(
                     cls, f'{ns}/radio/out/{kind}',
                     lambda msg, i=i, kind=kind: self.on_report(i, kind, msg), RADIO)
+        self.create_subscription(String, observer.TOPIC,
+                                 lambda m: self._observers_ready.add(m.data), observer.QOS)
         self._launched = time.monotonic()
         self.create_timer(0.02, self._tick)
         self.get_logger().info(
@@ -121,8 +126,8 @@ class WorldSimNode(Node):
         """Every agent's topics are matched both ways, and the expected observers are there.
 
         ``observers`` is how many nodes besides the agents must see the run from its first step
-        (the metrics node, a logger, a recorder): they subscribe to /world/truth and to every
-        agent's status.
+        (the metrics node, a logger, a recorder): each announces itself on /world/observers once
+        all its subscriptions are matched (sat_world_sim.observer).
         """
         for i in self.ids:
             ns = f'/agent_{i}'
@@ -130,13 +135,11 @@ class WorldSimNode(Node):
                 return False
             if self.count_publishers(f'{ns}/cmd') == 0:
                 return False
-            if self.count_subscribers(f'{ns}/status') < self.observers:
-                return False
             if any(self.inbox_pubs[(i, kind)].get_subscription_count() == 0
                    or self.count_publishers(f'{ns}/radio/out/{kind}') == 0
                    for kind, _ in RADIO_KINDS):
                 return False
-        return self.truth_pub.get_subscription_count() >= self.observers
+        return len(self._observers_ready) >= self.observers
 
     # -- the loop ---------------------------------------------------------------------------
 
