@@ -36,6 +36,8 @@ import urllib.error
 import urllib.parse
 import urllib.request
 
+from rerun.blueprint.components import AbsoluteTimeRange
+
 from sat_world_sim.rerun_view import (APPLICATION_ID, default_blueprint, private_rerun_env,
                                       rerun_command)
 
@@ -234,7 +236,12 @@ def main(argv=None) -> int:
         subprocess.run([*rerun_command(), 'rrd', 'optimize', str(args.rrd.resolve()), '-o',
                         str(recording)], env=env, check=True, stdout=subprocess.DEVNULL,
                        stderr=subprocess.DEVNULL)
-        default_blueprint(args.agents, args.area, play_state='paused').save(APPLICATION_ID, str(blueprint))
+        # The viewer ignores a #when= fragment on a recording URL: loop the playback over the
+        # chosen step instead, so the time cursor stays there.
+        layout = default_blueprint(
+            args.agents, args.area, play_state='playing', loop_mode='selection', fps=500.0,
+            time_selection=AbsoluteTimeRange(args.step, args.step + 1))
+        layout.save(APPLICATION_ID, str(blueprint))
         server = subprocess.Popen(
             [*rerun_command(), '--serve-web', '--bind', '127.0.0.1', '--port', str(grpc_port),
              '--web-viewer-port', str(web_port), str(recording), str(blueprint)],
@@ -243,7 +250,7 @@ def main(argv=None) -> int:
         try:
             wait_http(f'http://127.0.0.1:{web_port}/', 60, server)
             data = urllib.parse.quote(
-                f'rerun+http://127.0.0.1:{grpc_port}/proxy#when=step@{args.step}', safe='')
+                f'rerun+http://127.0.0.1:{grpc_port}/proxy', safe='')
             url = f'http://127.0.0.1:{web_port}/?url={data}'
             print(f'screenshot_viewer: {url}', flush=True)
             screenshot(chromium, url, args.out, size, args.wait, tmp / 'chromium-profile')

@@ -129,20 +129,43 @@ def test_agent_detects_a_target_in_view_and_switches_to_tracking_control():
     params = small_params()
     pose = np.array([50.0, 50.0])
     agent = Agent(1, params, pose, seed=3)
-    target = (lambda k: np.array([52.0 + 0.8 * k, 51.0]))
+    target = (lambda k: np.array([52.0 + 0.3 * k, 51.0]))
     measurements = target_measurements(target, np.random.default_rng(0))
     outputs = []
-    for k in range(1, 4):   # the world holds the agent: three scans of the same scene
+    for k in range(1, 7):   # the world holds the agent: six scans of the same scene
         outputs.append(agent.step(k, pose, measurements(k, pose), []))
-    assert [o.mode for o in outputs] == [Mode.SEARCH, Mode.SEARCH, Mode.TRACK]
-    search, track = outputs[0], outputs[2]
+    # Births from scan 1 grow with every scan; a new target needs round(mass) >= 1 on
+    # phd.confirm_scans = 2 scans in a row: tentative (round(mass) = 0, then 1) before that.
+    assert [o.mode for o in outputs] == [Mode.SEARCH] * 5 + [Mode.TRACK]
+    assert outputs[3].estimate.tentative and outputs[4].estimate.tentative_streaks == (1,)
+    search, track = outputs[0], outputs[5]
     assert len(search.plan) > 0 and len(track.plan) == 0
     (estimate,) = track.estimate.targets
-    assert np.linalg.norm(estimate.position - target(3)) < 1.5
+    assert np.linalg.norm(estimate.position - target(6)) < 1.5
     assert track.report.mode == Mode.TRACK and track.report.estimate is track.estimate
     np.testing.assert_allclose(track.goal, candidate_poses(pose, params.actions)[track.action])
-    # Tracking control keeps the target in the square it chooses.
-    assert np.max(np.abs(target(4) - track.goal)) <= 5.0
+    # Tracking control keeps the target in the square it chooses, at the stand-off.
+    assert np.max(np.abs(target(7) - track.goal)) <= 5.0
+    assert np.linalg.norm(estimate.position - track.goal) >= params.cooperation.track_standoff
+
+
+def test_searching_agent_holds_its_walk_to_look_at_a_tentative_peak():
+    params = small_params()
+    pose = np.array([50.0, 50.0])
+    agent = Agent(1, params, pose, seed=3)
+    target = (lambda k: np.array([52.0 + 0.3 * k, 51.0]))
+    measurements = target_measurements(target, np.random.default_rng(0))
+    outputs = [agent.step(k, pose, measurements(k, pose), []) for k in range(1, 5)]
+    assert outputs[3].mode == Mode.SEARCH and outputs[3].estimate.tentative
+    peak = outputs[3].estimate.tentative[0].position
+    # The walk's next node is not where it looks: the action is the tracking control's.
+    assert not np.allclose(outputs[3].goal, agent.planner.next_goal())
+    assert np.max(np.abs(peak - outputs[3].goal)) <= 5.0 - params.cooperation.track_edge_margin
+    # Without anything tentative, the same agent follows its walk.
+    fresh = Agent(1, params, pose, seed=3)
+    quiet = [fresh.step(k, pose, NO_MEASUREMENTS, []) for k in range(1, 5)]
+    assert not quiet[3].estimate.tentative
+    np.testing.assert_allclose(quiet[3].goal, fresh.planner.next_goal())
 
 
 def test_two_trackers_of_one_target_detect_the_overlap_and_the_higher_id_leaves():

@@ -161,12 +161,42 @@ def test_measurement_births_sit_on_measurements_inside_the_square():
     assert outside_square.all()
     born = measurement_births(z, POSE, params, rng)
     per_z = params.phd.birth_particles_per_measurement
-    assert born.mass == pytest.approx(params.phd.birth_mass_measurement, rel=0.1)
-    assert born.weights[0] == pytest.approx(params.phd.birth_mass_measurement / (2 * per_z))
+    # m_z = m_b r / r_max: a birth intensity uniform over the square's area.
+    m_b, r_max = params.phd.birth_mass_measurement, params.sensor.max_range
+    assert born.mass == pytest.approx(m_b * (3.0 + 2.0) / r_max, rel=0.1)
+    assert born.weights[0] == pytest.approx(m_b * 3.0 / r_max / per_z)
     assert _in_square(born.states).all()
     anchors = sensor_model.to_position(z[:2], POSE)
     nearest = np.min(np.linalg.norm(born.states[:, None, [0, 2]] - anchors[None], axis=2), 1)
     assert np.median(nearest) < 1.5
+
+
+def test_measurements_the_targets_explain_seed_no_births():
+    params = SatParams()
+    z = np.array([[3.0, 0.0], [4.0, np.pi / 2]])
+    explained = np.array([1.0, 0.25])
+    born = measurement_births(z, POSE, params, np.random.default_rng(3), explained)
+    anchors = sensor_model.to_position(z, POSE)
+    gaps = np.linalg.norm(born.states[:, None, [0, 2]] - anchors[None], axis=2)
+    assert np.all(np.argmin(gaps, axis=1) == 1)         # nothing born from the explained one
+    expected = params.phd.birth_mass_measurement * 4.0 / params.sensor.max_range * 0.75
+    per_z = params.phd.birth_particles_per_measurement
+    np.testing.assert_allclose(born.weights, expected / per_z, rtol=1e-12)
+
+
+def test_update_reports_the_share_of_each_measurement_the_targets_explain():
+    params = SatParams()
+    target = POSE + np.array([3.0, 0.0])
+    states = np.tile([target[0], 0.0, target[1], 0.0], (500, 1))
+    weights = np.full(500, 1.0 / 500)
+    z = np.vstack([sensor_model.measure(target[None], POSE), [[3.0, np.pi / 2]]])
+    explained = np.full(2, -1.0)
+    update_weights(states, weights, z, POSE, params.sensor, explained)
+    kappa = sensor_model.clutter_intensity(params.sensor)
+    g = sensor_model.likelihood(z, target[None], POSE, params.sensor)[0]
+    tau = params.sensor.p_detect * g
+    np.testing.assert_allclose(explained, tau / (kappa + tau), rtol=1e-9, atol=1e-12)
+    assert explained[0] > 0.9 and explained[1] < 1e-6
 
 
 def test_newborns_the_next_square_misses_are_dropped():

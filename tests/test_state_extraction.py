@@ -44,7 +44,7 @@ def test_mass_outside_the_region_is_not_counted():
 @given(seed=st.integers(0, 10_000), count=st.integers(1, 4))
 def test_well_separated_clusters_give_count_and_positions(seed, count):
     rng = np.random.default_rng(seed)
-    corners = np.array([(45.0, 45.0), (55.0, 55.0), (45.0, 55.0), (55.0, 45.0)])[:count]
+    corners = np.array([(46.5, 46.5), (53.5, 53.5), (46.5, 53.5), (53.5, 46.5)])[:count]
     velocities = rng.uniform(-1, 1, (count, 2))
     clouds = [_cloud(rng, c, 1.0, velocity=v) for c, v in zip(corners, velocities)]
     estimate = extract_targets(_phd(*clouds), POSE, PARAMS)
@@ -97,3 +97,59 @@ def test_close_targets_still_get_their_count():
     assert len(estimate.targets) == 2
     xs = np.sort(estimate.positions()[:, 0])
     assert xs[0] < 50.75 < xs[1]
+
+
+def test_a_target_of_the_last_step_continues_on_a_lighter_peak():
+    """Track continuity: 0.3 of mass keeps a target it could not start (round(0.3) = 0)."""
+    rng = np.random.default_rng(11)
+    cloud = _cloud(rng, (53, 48), 0.3, velocity=(0.5, 0.0))
+    assert extract_targets(_phd(cloud), POSE, PARAMS).targets == ()
+    expected = np.array([[52.0, 48.5]])     # within phd.continue_gate of the peak
+    (target,) = extract_targets(_phd(cloud), POSE, PARAMS, previous=expected).targets
+    np.testing.assert_allclose(target.position, (53, 48), atol=0.15)
+    assert target.weight == pytest.approx(0.3, abs=0.01)
+    # Too light, or too far from where the target should be: lost.
+    light = _cloud(rng, (53, 48), 0.5 * PARAMS.phd.continue_threshold)
+    assert extract_targets(_phd(light), POSE, PARAMS, previous=expected).targets == ()
+    far = np.array([[53.0 - PARAMS.phd.continue_gate - 1.0, 48.0]])
+    assert extract_targets(_phd(cloud), POSE, PARAMS, previous=far).targets == ()
+
+
+def test_a_continued_target_splits_only_at_mass_two():
+    rng = np.random.default_rng(12)
+    heavy = _cloud(rng, (53, 48), 1.7)
+    assert len(extract_targets(_phd(heavy), POSE, PARAMS).targets) == 2
+    assert len(extract_targets(_phd(heavy), POSE, PARAMS,
+                               previous=np.array([[53.0, 48.0]])).targets) == 1
+
+
+def test_new_targets_need_confirm_scans_in_a_row():
+    rng = np.random.default_rng(13)
+    cloud = _cloud(rng, (53, 48), 0.8)
+    none = (np.zeros((0, 2)), np.zeros(0, dtype=int))
+    first = extract_targets(_phd(cloud), POSE, PARAMS, candidates=none)
+    assert first.targets == () and first.tentative_streaks == (1,)
+    np.testing.assert_allclose(first.tentative[0].position, (53, 48), atol=0.15)
+    near = (np.array([[52.0, 48.0]]), np.array(first.tentative_streaks))
+    (target,) = extract_targets(_phd(cloud), POSE, PARAMS, candidates=near).targets
+    np.testing.assert_allclose(target.position, (53, 48), atol=0.15)
+    far = (np.array([[53.0 + PARAMS.phd.confirm_gate + 1.0, 48.0]]), np.array([1]))
+    assert extract_targets(_phd(cloud), POSE, PARAMS, candidates=far).targets == ()
+
+
+def test_light_peaks_in_the_square_are_tentative_not_targets():
+    rng = np.random.default_rng(14)
+    light = _cloud(rng, (53, 48), PARAMS.phd.tentative_threshold + 0.1)
+    faint = _cloud(rng, (46, 53), PARAMS.phd.tentative_threshold - 0.1)
+    estimate = extract_targets(_phd(light, faint), POSE, PARAMS)
+    assert estimate.targets == () and estimate.tentative_streaks == (0,)
+    np.testing.assert_allclose(estimate.tentative[0].position, (53, 48), atol=0.15)
+
+
+def test_mass_mostly_beyond_the_square_starts_no_target_but_continues_one():
+    rng = np.random.default_rng(15)
+    ghost = _cloud(rng, (57, 50), 1.0)      # in the extraction margin, outside the square
+    assert extract_targets(_phd(ghost), POSE, PARAMS).targets == ()
+    (target,) = extract_targets(_phd(ghost), POSE, PARAMS,
+                                previous=np.array([[56.5, 50.0]])).targets
+    np.testing.assert_allclose(target.position, (57, 50), atol=0.15)

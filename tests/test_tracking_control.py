@@ -104,3 +104,19 @@ def test_score_equals_divergence_of_a_full_pseudo_update():
         full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR)
         assert scores[action] == pytest.approx(renyi_divergence(predicted.weights, full, 0.5),
                                                rel=1e-9)
+
+
+def test_the_choice_keeps_the_target_at_the_stand_off_inside_the_square():
+    """Among the stand-off actions the Renyi score decides; the scores stay the Renyi ones."""
+    target = POSE + np.array([0.5, 0.0])                 # next to the agent
+    action, scores = tracking_action(_cloud(target, spread=0.8), _estimate(target), POSE, PARAMS)
+    chosen = actions.candidate_poses(POSE, PARAMS.actions)[action]
+    offset = np.abs(target - chosen)
+    assert np.hypot(*offset) >= PARAMS.cooperation.track_standoff
+    assert offset.max() <= SENSOR.square_side / 2.0 - PARAMS.cooperation.track_edge_margin
+    assert np.isfinite(scores).all() and scores[action] > 0.0
+    # Without a stand-off the agent would stay on top of the target (or move closer).
+    free = SatParams().with_overrides({'cooperation.track_standoff': 0.0})
+    best, _ = tracking_action(_cloud(target, spread=0.8), _estimate(target), POSE, free)
+    assert np.hypot(*(actions.candidate_poses(POSE, PARAMS.actions)[best] - target)) < (
+        PARAMS.cooperation.track_standoff)

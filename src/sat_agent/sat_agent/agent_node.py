@@ -14,12 +14,13 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
 
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
-seconds with what it has (a lost message must not stall it). Invalid input is dropped with a
-rate-limited warning and counted per reason.
+seconds with what it has (a lost message must not stall it). Every message is validated on
+arrival (sat_agent.msg_conversions: finite numbers, lengths, the grid geometry, known modes,
+sane counts, stale or future steps, the sender); an invalid one is dropped with a rate-limited
+warning and counted per reason, and the counters go to ``/diagnostics`` every second.
 """
 
 import argparse
-from collections import Counter
 import sys
 import time
 
@@ -30,18 +31,22 @@ from rclpy.utilities import remove_ros_args
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
+from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
-                                       point, report_from_msgs, report_to_msgs)
+                                       point, report_from_parts, report_part_from_msg,
+                                       report_to_msgs)
 from sat_agent.node_runner import run_nodes
 from sat_agent.qos import RADIO, STEP
 from sat_agent.ros_params import declare_required_int, declare_sat_params
+from sat_agent.search_density import Lattice
 from sat_msgs.msg import (AgentMode, AgentStatus, ControlCommand, MeasurementSet,
                           MultiTargetEstimate, SearchDensity)
 
 RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
 # Particles shown to the logger per step: enough to see the cloud, small on the wire.
 STATUS_PARTICLES = 300
-LOG_THROTTLE_S = 5.0
+# A scan further ahead than this is garbage, not a world that ran on without us.
+MAX_STEP_JUMP = 1000
 
 
 class AgentNode(Node):
@@ -54,10 +59,11 @@ class AgentNode(Node):
         self.seed = self.declare_parameter('seed', 0).value
         self.report_wait_timeout = float(self.declare_parameter('report_wait_timeout', 2.0).value)
         self.core = None
+        self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.last_step = 0
-        self.dropped = Counter()
-        self._pending = None          # (MeasurementSet, time it arrived)
-        self._radio = {}              # (sender, step) -> {kind: msg}
+        self.guard = InputGuard(self, f'agent_{self.agent_id}')
+        self._pending = None          # (step, (pose, measurements), deliveries, arrival time)
+        self._radio = {}              # (sender, step) -> {kind: validated content}
         self._received_since_step = 0
 
         self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP)
@@ -73,45 +79,59 @@ class AgentNode(Node):
 
     # -- input ------------------------------------------------------------------------------
 
-    def _drop(self, reason: str, detail: str):
-        self.dropped[reason] += 1
-        self.get_logger().warning(f'dropped message ({reason}): {detail}',
-                                  throttle_duration_sec=LOG_THROTTLE_S)
-
     def on_measurements(self, msg: MeasurementSet):
         if msg.agent_id != self.agent_id:
-            self._drop('wrong_agent_id', f'scan for agent {msg.agent_id}')
+            self.guard.drop('wrong_agent_id', f'scan for agent {msg.agent_id}')
             return
         if msg.step <= self.last_step:
-            self._drop('stale_step', f'scan of step {msg.step} after step {self.last_step}')
+            self.guard.drop('stale_step', f'scan of step {msg.step} after step {self.last_step}')
             return
+        if self.last_step and msg.step > self.last_step + MAX_STEP_JUMP:
+            self.guard.drop('future_step', f'scan of step {msg.step} at step {self.last_step}')
+            return
+        try:
+            scan = measurements_from_msg(msg)
+        except InvalidMessage as error:
+            self.guard.drop(error.reason, f'scan of step {msg.step}: {error.detail}')
+            return
+        self.guard.accept('measurements')
         if self._pending is not None:
             # The world moved on without our command (we were too slow): step the newest scan.
-            self._drop('superseded_scan', f'scan of step {self._pending[0].step} never stepped')
-        self._pending = (msg, time.monotonic())
+            self.guard.drop('superseded_scan', f'scan of step {self._pending[0]} never stepped')
+        self._pending = (msg.step, scan, msg.radio_deliveries, time.monotonic())
         self._try_step()
 
     def on_radio(self, kind: str, msg):
+        if msg.agent_id == self.agent_id:
+            self.guard.drop('own_report', f'{kind} from this agent came back')
+            return
+        if msg.step + 1 < self.last_step:
+            self.guard.drop('stale_step', f'{kind} of step {msg.step} at step {self.last_step}')
+            return
+        if msg.step > self.last_step + 1:
+            self.guard.drop('future_step', f'{kind} of step {msg.step} at step {self.last_step}')
+            return
+        try:
+            part = report_part_from_msg(kind, msg, self.lattice)
+        except InvalidMessage as error:
+            self.guard.drop(error.reason, f'{kind} of agent {msg.agent_id}: {error.detail}')
+            return
+        self.guard.accept(f'radio/in/{kind}')
         self._received_since_step += 1
-        if msg.agent_id == self.agent_id or msg.agent_id == 0:
-            self._drop('unknown_sender', f'{kind} from agent {msg.agent_id}')
-        elif msg.step < self.last_step - 1:
-            self._drop('stale_step', f'{kind} of step {msg.step} at step {self.last_step}')
-        else:
-            self._radio.setdefault((msg.agent_id, msg.step), {})[kind] = msg
+        self._radio.setdefault((msg.agent_id, msg.step), {})[kind] = part
         self._try_step()
 
     def _check_wait_timeout(self):
-        if self._pending and time.monotonic() - self._pending[1] > self.report_wait_timeout:
+        if self._pending and time.monotonic() - self._pending[3] > self.report_wait_timeout:
             self.get_logger().warning(
-                f'step {self._pending[0].step}: radio messages missing after '
+                f'step {self._pending[0]}: radio messages missing after '
                 f'{self.report_wait_timeout} s, stepping without them',
                 throttle_duration_sec=LOG_THROTTLE_S)
-            self._step(self._pending[0])
+            self._step()
 
     def _try_step(self):
-        if self._pending and self._received_since_step >= self._pending[0].radio_deliveries:
-            self._step(self._pending[0])
+        if self._pending and self._received_since_step >= self._pending[2]:
+            self._step()
 
     def _inbox(self, step: int):
         """Complete reports (all three kinds) of step k-1; older or partial ones are dropped."""
@@ -119,40 +139,33 @@ class AgentNode(Node):
         for (sender, sent), parts in sorted(self._radio.items()):
             if sent != step - 1:
                 continue
-            if len(parts) < len(RADIO_KINDS):
-                self._drop('partial_report', f'agent {sender} step {sent}: only {sorted(parts)}')
+            if len(parts) < len(REPORT_KINDS):
+                self.guard.drop('partial_report',
+                                f'agent {sender} step {sent}: only {sorted(parts)}')
                 continue
-            try:
-                reports.append(report_from_msgs(parts['search_density'], parts['estimate'],
-                                                parts['mode'], self.core.filter.search.lattice))
-            except InvalidMessage as error:
-                self._drop(error.reason, f'report of agent {sender}: {error.detail}')
+            reports.append(report_from_parts(sender, sent, parts))
         self._radio = {key: parts for key, parts in self._radio.items() if key[1] >= step}
         return reports
 
     # -- one step ---------------------------------------------------------------------------
 
-    def _step(self, msg: MeasurementSet):
+    def _step(self):
+        step, (pose, measurements), _, _ = self._pending
         self._pending = None
         self._received_since_step = 0
-        try:
-            pose, measurements = measurements_from_msg(msg)
-        except InvalidMessage as error:
-            self._drop(error.reason, f'scan of step {msg.step}: {error.detail}')
-            return
         started = time.perf_counter()
         if self.core is None:
             # (Re)started agents build their core at the first scan they get.
             self.core = Agent(self.agent_id, self.params, pose, seed=self.seed)
-        output = self.core.step(msg.step, pose, measurements, self._inbox(msg.step))
-        self.last_step = msg.step
+        output = self.core.step(step, pose, measurements, self._inbox(step))
+        self.last_step = step
         for kind, out in zip(REPORT_KINDS,
                              report_to_msgs(output.report, self.core.filter.search.lattice)):
             self.radio_pubs[kind].publish(out)
-        self.status_pub.publish(self._status(msg.step, pose, output,
+        self.status_pub.publish(self._status(step, pose, output,
                                              time.perf_counter() - started))
         target = candidate_poses(pose, self.params.actions)[output.action]
-        self.cmd_pub.publish(ControlCommand(agent_id=self.agent_id, step=msg.step,
+        self.cmd_pub.publish(ControlCommand(agent_id=self.agent_id, step=step,
                                             action_index=output.action,
                                             target_position=point(target)))
 

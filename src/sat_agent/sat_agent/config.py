@@ -122,9 +122,12 @@ class PhdParams:
     birth_rate: float = 0.01
     birth_particles_uniform: int = 2000
     # Measurement-driven births inside the sensing square (adaptive birth, Ristic et al. 2012):
-    # each scan spreads this mass over its measurements; clutter-born mass is killed by the next
-    # update, target-born mass is confirmed by it.
-    birth_mass_measurement: float = 0.2
+    # a measurement z at range r seeds mass m_b (r / r_max) (1 - tau(z) / (kappa + tau(z))),
+    # m_b = birth_mass_measurement (phd_filter.py). 0.12 (~0.5 per scan of ~9 in-square
+    # measurements): with 0.08 a target passing a searching agent rarely reaches the tentative
+    # threshold, with 0.15-0.2 clutter-born peaks reach round(mass) = 1 on consecutive scans
+    # and make false tracks (single_target / paper scenario study, helper report).
+    birth_mass_measurement: float = 0.12
     birth_particles_per_measurement: int = 100
     birth_velocity_std: float = 1.0    # m/s, prior spread of a newborn's velocity
     particles_per_target: int = 2000   # resampling budget per unit of PHD mass
@@ -134,14 +137,24 @@ class PhdParams:
     # moves ~1 m/step and the agent up to 4 m/step, so 5 m keeps a tracked target in the region
     # for a step even when it leaves the square.
     extraction_margin: float = 5.0
-    # Track continuity of the state extraction: a target extracted at k-1 continues while the
-    # peak found within continue_gate of its predicted position x + v T keeps at least this
-    # much mass; new targets need round(mass) >= 1. TBD
+    # State extraction (state_extraction.py). A peak's region: particles within peak_radius of
+    # it; a target's predicted cloud under the paper's Q is ~1.3 m (1 sigma), so 3 m holds
+    # ~90 % of its mass.
+    peak_radius: float = 3.0
+    # Track continuity: a target of k-1 continues while the peak found from its predicted
+    # position x + v T, within continue_gate (a walking target moves ~1 m/step, its estimate
+    # errs ~1 m), keeps continue_threshold of mass. Under lambda = 10 clutter a tracked
+    # target's PHD mass settles at ~0.3-0.6 (0.99 - kappa / g_bar), below the 0.5 that
+    # round(mass) needs, so a target is kept down to 0.2; below that it is lost.
     continue_threshold: float = 0.2
     continue_gate: float = 3.0
-    tentative_threshold: float = 0.15
-    peak_radius: float = 3.0
-    confirm_scans: int = 3
+    # Confirmation: a new target needs round(mass) >= 1 on confirm_scans scans in a row at
+    # peaks within confirm_gate of each other (clutter-born peaks rarely stay that heavy twice).
+    confirm_scans: int = 2
+    confirm_gate: float = 3.0
+    # Unconfirmed peaks in the square with at least this mass are tentative: a searching agent
+    # may stop to look at them (agent_core, search.investigate_steps).
+    tentative_threshold: float = 0.2
 
     def validate(self, prefix='phd'):
         _check(f'{prefix}.birth_rate', self.birth_rate, 0, 10)
@@ -159,6 +172,7 @@ class PhdParams:
         _check(f'{prefix}.tentative_threshold', self.tentative_threshold, 0, 0.5)
         _check(f'{prefix}.peak_radius', self.peak_radius, 0, 100, low_open=True)
         _check(f'{prefix}.confirm_scans', self.confirm_scans, 1, 100)
+        _check(f'{prefix}.confirm_gate', self.confirm_gate, 0, 100)
 
 
 @dataclass(frozen=True)
@@ -175,7 +189,8 @@ class SearchParams:
     # its region seen recently"; a fully searched region takes ln(0.5)/ln(0.999) ~ 693 steps to
     # need a revisit.
     unvisited_threshold: float = 0.5
-    # TBD investigate
+    # Steps a searching agent may spend looking at one tentative peak (agent_core): enough
+    # for confirm_scans more scans from a stand-off, short enough to keep the search going.
     investigate_steps: int = 4
 
     def validate(self, prefix='search'):

@@ -157,14 +157,24 @@ def report_to_msgs(report: AgentReport, lattice: Lattice):
             mode_to_msg(report.agent_id, report.step, report.pose, report.mode))
 
 
-def report_from_msgs(density: SearchDensity, estimate: EstimateMsg, mode: AgentMode,
-                     lattice: Lattice) -> AgentReport:
-    """Join the three radio messages of one sender and step into an AgentReport."""
-    ids = {density.agent_id, estimate.agent_id, mode.agent_id}
-    steps = {density.step, estimate.step, mode.step}
-    if len(ids) != 1 or len(steps) != 1:
-        raise InvalidMessage('inconsistent_report', f'agent ids {ids}, steps {steps}')
-    pose = _finite('non_finite', xy(mode.position), 'position')
-    return AgentReport(agent_id=int(mode.agent_id), step=int(mode.step), pose=pose,
-                       mode=mode_from_msg(mode), search_values=density_from_msg(density, lattice),
-                       estimate=estimate_from_msg(estimate))
+def report_part_from_msg(kind: str, msg, lattice: Lattice):
+    """Validate one radio message and return its content for report_from_parts.
+
+    search_density -> (ny, nx) values; estimate -> MultiTargetEstimate; mode -> (Mode, pose).
+    """
+    if msg.agent_id == 0:
+        raise InvalidMessage('unknown_sender', 'agent id 0')
+    if kind == 'search_density':
+        return density_from_msg(msg, lattice)
+    if kind == 'estimate':
+        return estimate_from_msg(msg)
+    if kind == 'mode':
+        return mode_from_msg(msg), _finite('non_finite', xy(msg.position), 'position')
+    raise ValueError(f'unknown report kind {kind!r}')
+
+
+def report_from_parts(sender: int, step: int, parts) -> AgentReport:
+    """Join the validated contents of one sender's three messages of one step."""
+    mode, pose = parts['mode']
+    return AgentReport(agent_id=int(sender), step=int(step), pose=pose, mode=mode,
+                       search_values=parts['search_density'], estimate=parts['estimate'])

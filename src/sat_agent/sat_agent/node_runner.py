@@ -13,15 +13,20 @@ class RunFinished(SystemExit):
 def run_nodes(name: str, factory, args=None) -> int:
     """Create the node(s) factory() returns, spin them in one executor, return the exit code.
 
-    Ctrl-C and external shutdown end cleanly with 0; a ValueError while building (bad
-    parameters, scenario, YAML) is printed as one line naming the problem and gives 2;
-    RunFinished from a callback ends the spin with its code.
+    Ctrl-C and external shutdown end cleanly with 0; a ValueError or OSError while building the
+    nodes (bad parameters, a missing or malformed scenario or YAML file) is printed as one line
+    naming the problem and gives 2; RunFinished from a callback ends the spin with its code.
+    Any other error is a bug and propagates with its traceback.
     """
     rclpy.init(args=args)
     nodes = []
     code = 0
     try:
-        made = factory()
+        try:
+            made = factory()
+        except (ValueError, OSError) as error:
+            print(f'{name}: {error}', file=sys.stderr, flush=True)
+            return 2
         nodes = list(made) if isinstance(made, (list, tuple)) else [made]
         executor = SingleThreadedExecutor()
         for node in nodes:
@@ -31,9 +36,6 @@ def run_nodes(name: str, factory, args=None) -> int:
         pass
     except RunFinished as done:
         code = done.code or 0
-    except ValueError as error:
-        print(f'{name}: {error}', file=sys.stderr, flush=True)
-        code = 2
     finally:
         for node in nodes:
             node.destroy_node()

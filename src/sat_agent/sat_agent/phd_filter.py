@@ -7,7 +7,7 @@ then ``correct(Z_k, s_k)`` (Eqn. satphd_correct).
 Birth intensity b_k(x) of Eqn. satphd_predict, with x = [p, v] (position p, velocity v):
 
     b_k(x) = r_u U_A(p) N(v; 0, sigma_v^2 I)
-           + sum_{z in Z'_{k-1}} (m_z / |Z'_{k-1}|) integral pi(x | x') beta_z(x') dx',
+           + sum_{z in Z'_{k-1}} m_z integral pi(x | x') beta_z(x') dx',
     beta_z(x') = law of p' = h^{-1}(z + e, s_{k-1}), e ~ N(0, Sigma(z)), kept when p' is in
                  S_a(s_{k-1}), times N(v'; 0, sigma_v^2 I),
 
@@ -19,7 +19,13 @@ Birth intensity b_k(x) of Eqn. satphd_predict, with x = [p, v] (position p, velo
   square, the only place a target can be detected), ``phd.birth_particles_per_measurement``
   particles are drawn at h^{-1}(z + v, s_k), v ~ N(0, diag(sigma_r^2, sigma_b^2)) at z's range,
   with velocity N(0, sigma_v^2); draws that land outside the square are dropped. Their weight is
-  m_z / (|Z'| n_z), m_z = ``phd.birth_mass_measurement``. They are kept aside (not in the
+  m_z / n_z with m_z = m_b (r(z) / r_max) (1 - tau(z) / (kappa + tau(z))), m_b =
+  ``phd.birth_mass_measurement``: a birth intensity uniform over the square's area has density
+  proportional to the range r in [range, bearing] space (dx dy = r dr dtheta) while the clutter's
+  is flat, so a far measurement is likelier a new target than one next to the agent (where
+  clutter is kappa / r per m^2); and the share tau / (kappa + tau) of z that the predicted
+  targets already explain (``update_weights``) seeds nothing, as in Ristic et al.'s update of
+  newborn weights by kappa + tau + gamma. They are kept aside (not in the
   posterior, so they do not bias the extracted count) and join the targets at the next predict,
   where they are propagated with the motion model like every particle; the next scan then
   confirms them (a target is there) or kills them (clutter). Newborns that the next square does

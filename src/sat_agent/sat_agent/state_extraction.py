@@ -6,16 +6,28 @@ target: under lambda = 10 clutter every scan leaves small clouds of clutter-born
 < 0.5, together often > 0.5) scattered over the square. So the regions R here are the PHD's
 peaks: mass is counted per peak, and a peak stands for round(its mass) targets.
 
-Within the extraction region (the sensing square grown by ``phd.extraction_margin``):
+Within the extraction region (the sensing square grown by ``phd.extraction_margin``), with
+r = ``phd.peak_radius``:
 
-1. peak: the heaviest cell of the particle weights binned on a ``PEAK_CELL`` grid and smoothed
-   over 3 x 3 cells, refined by a few weighted mean-shift steps over the particles within
-   ``PEAK_RADIUS`` (so diffuse mass nearby does not drag it);
-2. region R = the particles not yet claimed within ``PEAK_RADIUS`` of the peak; it stands for
-   n = round(mass of R) targets: one estimate when n = 1, n weighted k-means clusters (seeded
-   from the heaviest particles, deterministic) when targets are closer than ``PEAK_RADIUS``;
-3. R's particles are claimed and the next peak is sought, until the unclaimed mass in the
-   region is below 0.5 (no further peak can round to a target).
+1. continued targets first (track continuity, a choice the paper leaves open): for each target
+   extracted at k-1, in order, mean-shift from its predicted position x + v T over the
+   unclaimed particles within r; if the peak stays within ``phd.continue_gate`` and its region
+   (unclaimed particles within r) holds at least ``phd.continue_threshold``, the target
+   continues with max(1, floor(mass)) estimates and the region is claimed. Under lambda = 10
+   clutter a tracked target's mass settles at ~0.3-0.6 (0.99 - kappa / g_bar), so requiring
+   round(mass) >= 1 at every step would drop it every few steps;
+2. new peaks: the heaviest cell of the unclaimed weights binned on a ``PEAK_CELL`` grid and
+   smoothed over 3 x 3 cells, refined by weighted mean-shift within r (so diffuse mass nearby
+   does not drag it); its region stands for n = round(mass) targets (one estimate when n = 1,
+   n weighted k-means clusters otherwise). A new target needs most of its region's mass inside
+   the sensing square (mass beyond it is never corrected) and, when the caller passes the
+   tentative peaks
+   of k-1 (``candidates``), round(mass) >= 1 on ``phd.confirm_scans`` scans in a row at peaks
+   within ``phd.confirm_gate``: clutter-born clouds seldom stay that heavy twice. Lighter or
+   not yet confirmed peaks in the square with at least ``phd.tentative_threshold`` are
+   returned as ``tentative`` (not targets; the agent may look closer, agent_core);
+3. regions are claimed and the next peak is sought until the unclaimed mass is below the
+   lowest threshold that can still give a target or a tentative peak.
 
 No random numbers are used and ties go to the lowest index, so the same PHD always gives the same
 estimate. Each estimate carries its cluster's weighted mean velocity, its weighted covariance
@@ -35,8 +47,6 @@ from sat_agent.phd_filter import ParticlePHD
 # A target's posterior cloud is about 1 m wide (sigma_r ~ 1 m in the square): bins of that size
 # resolve it.
 PEAK_CELL = 1.0
-# A peak's region: a target's predicted cloud (paper's Q) is ~1.5 m wide, so 3 m holds it.
-PEAK_RADIUS = 3.0
 MEAN_SHIFT_STEPS = 5
 LLOYD_ITERATIONS = 10
 # More peaks than any square can hold targets; bounds the loop on pathological input.
@@ -84,7 +94,7 @@ def extract_targets(phd: ParticlePHD, pose, params: SatParams,
     candidates: (positions (m, 2), streaks (m,)) of the tentative peaks of k-1, positions
     predicted to k. When given (not None), a peak with round(mass) >= 1 becomes a new target
     only on its ``phd.confirm_scans``-th scan in a row with round(mass) >= 1 (its streak: one
-    more than the longest streak of a candidate within ``phd.continue_gate``); before that it
+    more than the longest streak of a candidate within ``phd.confirm_gate``); before that it
     is a tentative peak with that streak. None: one scan is enough.
     """
     phd_params = params.phd
@@ -125,12 +135,13 @@ def extract_targets(phd: ParticlePHD, pose, params: SatParams,
         member = unclaimed & (np.hypot(*(points - peak).T) < radius)
         unclaimed &= ~member
         peak_mass = weights[member].sum()
-        if not sensor_model.in_sensing_square(peak[None], pose, params.sensor.square_side)[0]:
+        seen = sensor_model.in_sensing_square(points[member], pose, params.sensor.square_side)
+        if weights[member][seen].sum() < 0.5 * peak_mass:
             # Mass beyond the square (no p_D there, Eqn. sensing_model) is never corrected and
             # only decays with p_S: it can continue a target but not make a new one.
             continue
         count = int(np.floor(peak_mass + 0.5))
-        streak = _streak(peak, candidates, phd_params.continue_gate) if count >= 1 else 0
+        streak = _streak(peak, candidates, phd_params.confirm_gate) if count >= 1 else 0
         if count >= 1 and (candidates is None or streak >= phd_params.confirm_scans):
             estimates.extend(_estimates(states[member], points[member], weights[member], peak,
                                         count))
@@ -171,7 +182,7 @@ def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,
 
 def _mean_shift(points: np.ndarray, weights: np.ndarray, active: np.ndarray,
                 center: np.ndarray, radius: float) -> np.ndarray:
-    """Move center to the weighted mean of the active particles within PEAK_RADIUS, repeatedly."""
+    """Move center to the weighted mean of the active particles within radius, repeatedly."""
     for _ in range(MEAN_SHIFT_STEPS):
         near = active & (np.hypot(*(points - center).T) < radius)
         total = weights[near].sum()

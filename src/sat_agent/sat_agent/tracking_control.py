@@ -58,14 +58,14 @@ def tracking_action(predicted: ParticlePHD, estimates: MultiTargetEstimate, pose
                     params: SatParams):
     """Return (action index, scores (n_actions,)) maximising Eqn. track_control.
 
-    Inadmissible actions score -inf. Ties go to the lowest index (np.argmax), so when no action
-    is informative (all scores 0) the agent stays (action 0).
+    Inadmissible actions score -inf. The argmax runs over the stand-off actions (module
+    docstring) when there are any. Ties go to the lowest index (np.argmax), so when no action
+    is informative (all scores 0) the agent stays (action 0) if staying keeps the stand-off.
     """
     sensor = params.sensor
     poses = actions.candidate_poses(pose, params.actions)
     allowed = actions.admissible_mask(pose, params.actions, params.area)
-    allowed &= _standoff_mask(poses, estimates.positions(), params) | ~np.any(
-        allowed & _standoff_mask(poses, estimates.positions(), params))
+    preferred = allowed & _standoff_mask(poses, estimates.positions(), params)
     # Only particles some candidate square can see take part: the others keep their weight
     # under every action and add exactly 0 to every score.
     reach = sensor.square_side + 2.0 * float(np.max(np.abs(poses - np.asarray(pose, float))))
@@ -77,7 +77,9 @@ def tracking_action(predicted: ParticlePHD, estimates: MultiTargetEstimate, pose
         z = predicted_ideal_measurements(estimates, poses[action], sensor)
         posterior = update_weights(states, weights, z, poses[action], sensor)
         scores[action] = renyi_divergence(weights, posterior, alpha)
-    return int(np.argmax(scores)), scores
+    if not preferred.any():
+        return int(np.argmax(scores)), scores
+    return int(np.argmax(np.where(preferred, scores, -np.inf))), scores
 
 
 def _standoff_mask(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> np.ndarray:

@@ -65,7 +65,7 @@ class LoggerNode(Node):
         self.rrd_path = self.run_dir / 'run.rrd'
         env = rerun_view.disable_analytics(self.run_dir / '.rerun')
         self.viewer = None
-        self.recording = rerun_view.new_recording()
+        self.recording = rerun_view.new_recording(live=sink != 'file')
         blueprint = rerun_view.default_blueprint(
             self.agent_ids, (self.params.area.width, self.params.area.height))
         sinks = [rr.FileSink(str(self.rrd_path))]

@@ -12,7 +12,8 @@ Entity paths (all map entities are in world metres, x east, y north)::
     map/world/area                       static outline of the area [0, W] x [0, H]
     map/world/density/fused              fused search density, elementwise max over agents
     map/world/density/agent_<i>          agent i's own search density (its radio/out message)
-        DepthImage, uint8 (0 = never searched, 255 = just searched), colormap viridis, with a
+        DepthImage, uint8 (0 = never searched, 255 = just searched), colormap viridis over
+        [0, 400] (searched cells are its middle teal, never searched dark purple), with a
         Transform3D placing lattice cell (row, col) at its world cell, so row 0 is y = origin_y.
     map/world/agent_<i>/position         Points2D, label "<i> SEARCH|TRACK", the agent's colour
     map/world/agent_<i>/square           Boxes2D, the sensing square (sensor.square_side)
@@ -66,12 +67,16 @@ from sat_world_sim.records import MODE_NAMES, step_record
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
+FILE_FLUSH_TICK_S = 2.0
 # Distinct agent colours (the tab10 palette) and the truth's colour.
 PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (148, 103, 189), (140, 86, 75),
            (227, 119, 194), (188, 189, 34), (23, 190, 207)]
 TRUTH_COLOUR = (214, 39, 40)
 LINK_COLOUR = (240, 240, 240)
 SIGMAS = 2.0
+# Colormap range of the density images (uint8, 255 = just searched): past 255, so a searched
+# cell is viridis' middle teal and the agents' lines stay readable on it.
+DENSITY_RANGE = [0.0, 400.0]
 ELLIPSE_POINTS = 32
 
 
@@ -101,10 +106,10 @@ def density_image(msg) -> np.ndarray:
     return np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def default_blueprint(agent_ids, area=(100.0, 100.0), play_state=None) -> rrb.Blueprint:
+def default_blueprint(agent_ids, area=(100.0, 100.0), **time_panel) -> rrb.Blueprint:
     """Return the at-a-glance layout (module docstring) for these agents and area (W, H).
 
-    play_state: the time panel's 'paused' | 'playing' | 'following' (None: the viewer's).
+    time_panel: extra rrb.TimePanel arguments (play_state, loop_mode, time_selection, ...).
     """
     ids = sorted(int(i) for i in agent_ids)
     margin = 0.05 * max(area)
@@ -139,7 +144,7 @@ def default_blueprint(agent_ids, area=(100.0, 100.0), play_state=None) -> rrb.Bl
         rrb.Horizontal(left, plots, column_shares=[3, 2]),
         rrb.BlueprintPanel(state='collapsed'),
         rrb.SelectionPanel(state='collapsed'),
-        rrb.TimePanel(state='collapsed', timeline=TIMELINE, play_state=play_state),
+        rrb.TimePanel(**{'state': 'collapsed', 'timeline': TIMELINE, **time_panel}),
     )
 
 
@@ -167,7 +172,7 @@ class SwarmLogger:
             [[[0, 0], [width, 0], [width, height], [0, height], [0, 0]]],
             colors=[(200, 200, 200)], radii=[0.3], draw_order=5.0), static=True)
         series = {
-            'plots/ospa/total': ('OSPA', (230, 230, 230)),
+            'plots/ospa/total': ('OSPA', (148, 103, 189)),
             'plots/ospa/localisation': ('localisation', (31, 119, 180)),
             'plots/ospa/cardinality': ('cardinality', (255, 127, 14)),
             'plots/count/true': ('true', TRUTH_COLOUR),
@@ -190,7 +195,7 @@ class SwarmLogger:
             translation=[float(grid.origin_x), float(grid.origin_y), 0.0],
             scale=[resolution, resolution, 1.0]))
         self.rec.log(path, rr.DepthImage(image, meter=255.0, colormap='viridis',
-                                         depth_range=[0.0, 255.0], draw_order=-10.0))
+                                         depth_range=DENSITY_RANGE, draw_order=-10.0))
 
     def log_step(self, truth, traffic=None, statuses: Optional[Mapping[int, object]] = None,
                  densities: Optional[Mapping[int, object]] = None) -> dict:
@@ -351,6 +356,14 @@ def rerun_command() -> list:
     return [sys.executable, '-m', 'rerun_cli']
 
 
-def new_recording(recording_id: Optional[str] = None) -> rr.RecordingStream:
-    """Return a RecordingStream for a sat-swarm run (not the global one)."""
-    return rr.RecordingStream(APPLICATION_ID, recording_id=recording_id)
+def new_recording(recording_id: Optional[str] = None,
+                  live: bool = True) -> rr.RecordingStream:
+    """Return a RecordingStream for a sat-swarm run (not the global one).
+
+    live=False (a file only) batches up to FILE_FLUSH_TICK_S of data per chunk: far fewer,
+    larger chunks, so the .rrd is smaller and loads faster.
+    """
+    batcher = None if live else rr.ChunkBatcherConfig(flush_tick=FILE_FLUSH_TICK_S,
+                                                      flush_num_bytes=8 << 20)
+    return rr.RecordingStream(APPLICATION_ID, recording_id=recording_id,
+                              batcher_config=batcher)

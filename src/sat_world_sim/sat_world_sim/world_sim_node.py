@@ -17,7 +17,9 @@ Clocks (parameter ``clock``):
 
 An agent that stays silent for ``agent_timeout`` seconds (lock-step) is marked inactive: it holds
 position and is not waited for until it speaks again. Commands that are not one of the actions
-of Eqn. controlVectors or leave the area are refused with a log line; the agent holds.
+of Eqn. controlVectors or leave the area are refused with a log line; the agent holds. Every
+command and report is validated (the sender's namespace, the step, the content: the radio never
+forwards garbage); what is dropped is counted per reason on ``/diagnostics``.
 When the run is over the node publishes a final WorldStep with ``finished`` and exits.
 """
 
@@ -27,14 +29,18 @@ import time
 
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
+import numpy as np
 from rclpy.node import Node
 from std_msgs.msg import String
 
 from sat_agent.agent_core import REPORT_KINDS, wire_bytes
-from sat_agent.msg_conversions import measurements_to_msg, point
+from sat_agent.input_guard import InputGuard
+from sat_agent.msg_conversions import (InvalidMessage, measurements_to_msg, point,
+                                       report_part_from_msg)
 from sat_agent.node_runner import run_nodes, RunFinished
 from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
+from sat_agent.search_density import Lattice
 from sat_msgs.msg import (AgentMode, AgentTruth, ControlCommand, GroundTruth, MeasurementSet,
                           MultiTargetEstimate, RadioTraffic, SearchDensity, TargetTruth,
                           WorldStep)
@@ -46,7 +52,6 @@ from sat_world_sim.world_model import World
 
 RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
-LOG_THROTTLE_S = 5.0
 DISCOVERY_SETTLE_S = 0.5
 
 
@@ -87,7 +92,8 @@ class WorldSimNode(Node):
         self.world = World(scenario, self.params)
         self.ids = self.world.agent_ids
         self.active = set(self.ids)
-        self.refused = Counter()
+        self.guard = InputGuard(self, 'world_sim')
+        self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.late_commands = 0
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
@@ -211,9 +217,7 @@ class WorldSimNode(Node):
         moves = self.world.apply_actions(self._cmds)
         for agent_id, move in moves.items():
             if not move.accepted and agent_id in self._cmds:
-                self.refused[agent_id] += 1
-                self.get_logger().warning(f'step {k}: agent {agent_id}: {move.reason}',
-                                          throttle_duration_sec=LOG_THROTTLE_S)
+                self.guard.drop('refused_action', f'step {k}: agent {agent_id}: {move.reason}')
         if k >= self.total_steps:
             self.step_pub.publish(self._step_msg(k, finished=True))
             self.get_logger().info(f'run finished after step {k}')
@@ -227,11 +231,14 @@ class WorldSimNode(Node):
     def _current(self, agent_id: int, msg, what: str) -> bool:
         """Whether msg is this agent's and of the current step; a silent agent speaking rejoins."""
         if msg.agent_id != agent_id:
-            self.get_logger().warning(
-                f'{what} on /agent_{agent_id} claims agent_id {msg.agent_id}: dropped',
-                throttle_duration_sec=LOG_THROTTLE_S)
+            self.guard.drop('wrong_agent_id',
+                            f'{what} on /agent_{agent_id} claims agent_id {msg.agent_id}')
             return False
-        if not self._started or self._finished_at is not None or msg.step != self.world.step:
+        if not self._started or self._finished_at is not None or msg.step < self.world.step:
+            self.guard.drop('stale_step', f'{what} of step {msg.step} at {self.world.step}')
+            return False
+        if msg.step > self.world.step:
+            self.guard.drop('future_step', f'{what} of step {msg.step} at {self.world.step}')
             return False
         if agent_id not in self.active:
             self.get_logger().info(f'agent {agent_id} speaks again: active')
@@ -239,19 +246,36 @@ class WorldSimNode(Node):
         return True
 
     def on_cmd(self, agent_id: int, msg: ControlCommand):
-        if self._current(agent_id, msg, 'cmd'):
-            self._cmds[agent_id] = int(msg.action_index)
-            self._maybe_finish()
+        if not self._current(agent_id, msg, 'cmd'):
+            return
+        if agent_id in self._cmds:
+            self.guard.drop('duplicate', f'second cmd of agent {agent_id} for step {msg.step}')
+            return
+        self.guard.accept('cmd')
+        self._cmds[agent_id] = int(msg.action_index)
+        self._maybe_finish()
 
     def on_report(self, agent_id: int, kind: str, msg):
-        if self._current(agent_id, msg, f'radio/out/{kind}') and kind not in \
-                self._reports[agent_id]:
-            self._reports[agent_id].add(kind)
-            count = len(msg.values) if kind == 'search_density' else len(
-                getattr(msg, 'targets', ()))
-            self.radio.send(msg.step, agent_id, kind, msg, wire_bytes(kind, count),
-                            self.world.poses())
-            self._maybe_finish()
+        """Validate an agent's report message and hand it to the radio (never forward garbage)."""
+        if not self._current(agent_id, msg, f'radio/out/{kind}'):
+            return
+        if kind in self._reports[agent_id]:
+            self.guard.drop('duplicate', f'second {kind} of agent {agent_id} at {msg.step}')
+            return
+        try:
+            part = report_part_from_msg(kind, msg, self.lattice)
+        except InvalidMessage as error:
+            self.guard.drop(error.reason, f'{kind} of agent {agent_id}: {error.detail}')
+            return
+        self.guard.accept(f'radio/out/{kind}')
+        self._reports[agent_id].add(kind)
+        if kind == 'search_density':
+            count = np.size(part)
+        else:
+            count = len(part.targets) if kind == 'estimate' else 0
+        self.radio.send(msg.step, agent_id, kind, msg, wire_bytes(kind, count),
+                        self.world.poses())
+        self._maybe_finish()
 
     # -- messages ---------------------------------------------------------------------------
 

@@ -1,0 +1,54 @@
+"""Dropped-input bookkeeping shared by the nodes.
+
+A counter per reason, rate-limited warnings, and the counters published on ``/diagnostics``
+(diagnostic_msgs/DiagnosticArray) once a second.
+"""
+
+from collections import Counter
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+LOG_THROTTLE_S = 5.0
+DIAGNOSTICS_PERIOD_S = 1.0
+
+
+class InputGuard:
+    """Counts what a node accepted and what it dropped, and why; reports it on /diagnostics."""
+
+    def __init__(self, node, hardware_id: str):
+        self._node = node
+        self._hardware_id = hardware_id
+        self.accepted = Counter()    # topic kind -> messages taken
+        self.dropped = Counter()     # reason -> messages dropped
+        self._reported = 0
+        self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        node.create_timer(DIAGNOSTICS_PERIOD_S, self.publish)
+
+    def accept(self, kind: str):
+        """Count one valid message of this kind."""
+        self.accepted[kind] += 1
+
+    def drop(self, reason: str, detail: str):
+        """Count one dropped message and warn (at most once per LOG_THROTTLE_S per call site)."""
+        self.dropped[reason] += 1
+        self._node.get_logger().warning(f'dropped ({reason}): {detail}',
+                                        throttle_duration_sec=LOG_THROTTLE_S)
+
+    def status(self) -> DiagnosticStatus:
+        """Return the counters as one DiagnosticStatus (WARN while new drops keep coming)."""
+        total = sum(self.dropped.values())
+        level = DiagnosticStatus.WARN if total > self._reported else DiagnosticStatus.OK
+        self._reported = total
+        values = [KeyValue(key=f'accepted.{k}', value=str(n))
+                  for k, n in sorted(self.accepted.items())]
+        values += [KeyValue(key=f'dropped.{k}', value=str(n))
+                   for k, n in sorted(self.dropped.items())]
+        name = f'{self._node.get_fully_qualified_name()}: input'
+        return DiagnosticStatus(level=level, name=name, hardware_id=self._hardware_id,
+                                message=f'{total} message(s) dropped', values=values)
+
+    def publish(self):
+        """Publish the counters on /diagnostics."""
+        array = DiagnosticArray(status=[self.status()])
+        array.header.stamp = self._node.get_clock().now().to_msg()
+        self._publisher.publish(array)
