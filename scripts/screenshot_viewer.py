@@ -6,21 +6,23 @@
 Needs Debian's ``chromium`` (``apt-get update && apt-get install -y chromium``; pass
 ``--install-chromium`` to have this script run exactly that when it is missing). Steps:
 
-1. ``rerun --serve-web --bind 127.0.0.1 <rrd>`` serves the recording (gRPC) and the web viewer
+1. ``rerun rrd optimize`` compacts the recording (a live logger writes many small chunks, which
+   the web viewer ingests slowly) and the layout stored in it is replaced by today's
+   rerun_view.default_blueprint, set to loop playback over ``--step`` (the web viewer ignores
+   ``#when=`` on a recording URL), so the time cursor sits at that step.
+2. ``rerun --serve-web --bind 127.0.0.1 <rrd> <rbl>`` serves both (gRPC) and the web viewer
    (HTTP) on free loopback ports, with Rerun's config in a private temporary directory where
    analytics are disabled (sat_world_sim.rerun_view.private_rerun_env).
-2. Headless Chromium (temporary profile, software WebGL) opens the viewer at the chosen step
-   (URL fragment ``#when=step@<k>``). It is driven over the DevTools protocol through a pipe
+3. Headless Chromium (temporary profile, software WebGL) opens the viewer. It is driven over the
+   DevTools protocol through a pipe
    (``--remote-debugging-pipe``): no debugging port is opened, and every host name other than
    127.0.0.1 resolves to nothing (``--host-resolver-rules``), so the page reaches loopback only.
-3. After ``--wait`` seconds (software WebGL needs tens of them) ``Page.captureScreenshot``
+4. After ``--wait`` seconds (software WebGL needs tens of them) ``Page.captureScreenshot``
    writes the PNG. Every process started here is stopped by its pid.
 """
 
 import argparse
 import base64
-import functools
-import http.server
 import json
 import os
 from pathlib import Path
@@ -30,16 +32,15 @@ import socket
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 import urllib.error
 import urllib.parse
 import urllib.request
 
 from rerun.blueprint.components import AbsoluteTimeRange
+from rerun.chunk import RrdReader
 
-from sat_world_sim.rerun_view import (APPLICATION_ID, default_blueprint, private_rerun_env,
-                                      rerun_command)
+from sat_world_sim.rerun_view import default_blueprint, private_rerun_env, rerun_command
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM_NAMES = ('chromium', 'chromium-browser')
@@ -47,35 +48,22 @@ CHROMIUM_FLAGS = [
     '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
     '--disable-background-networking', '--disable-component-update', '--disable-sync',
     '--disable-default-apps', '--disable-extensions', '--mute-audio', '--hide-scrollbars',
-    '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-breakpad',
+    '--disable-crash-reporter',
     '--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1',
 ]
 
 
-class FilesHandler(http.server.SimpleHTTPRequestHandler):
-    """Serves the given files by name to the viewer's origin (CORS), quietly."""
-
-    def __init__(self, *args, files: dict, **kwargs):
-        self.files = files
-        super().__init__(*args, **kwargs)
-
-    def translate_path(self, path):
-        return str(self.files.get(path.split('?')[0].lstrip('/'), '/nonexistent'))
-
-    def end_headers(self):
-        self.send_header('Access-Control-Allow-Origin', '*')
-        super().end_headers()
-
-    def log_message(self, *args):
-        pass
-
-
-def serve_files(files: dict) -> http.server.ThreadingHTTPServer:
-    """Serve {name: path} as http://127.0.0.1:<port>/<name> from a thread; return the server."""
-    server = http.server.ThreadingHTTPServer(('127.0.0.1', 0),
-                                             functools.partial(FilesHandler, files=files))
-    threading.Thread(target=server.serve_forever, daemon=True).start()
-    return server
+def recording_only(source: Path, target: Path) -> str:
+    """Copy the first recording of source (not its layouts) to target; return its app id."""
+    reader = RrdReader(source)
+    entries = reader.recordings()
+    if not entries:
+        raise SystemExit(f'screenshot_viewer: {source} holds no recording')
+    entry = entries[0]
+    reader.store(store=entry).write_rrd(target, application_id=entry.application_id,
+                                        recording_id=entry.recording_id)
+    return entry.application_id
 
 
 def free_port() -> int:
@@ -164,8 +152,12 @@ class DevTools:
         return json.loads(message)
 
 
-def screenshot(chromium: str, url: str, out: Path, size, wait: float, profile: Path):
-    """Open url in headless chromium, wait, and write a PNG screenshot to out."""
+def screenshot(chromium: str, url: str, out: Path, size, wait: float, profile: Path, env: dict):
+    """Open url in headless chromium, wait, and write a PNG screenshot to out.
+
+    env should point XDG_CONFIG_HOME / XDG_CACHE_HOME at a temporary directory: chromium keeps
+    its crash-report database there even with --user-data-dir, not in the user's ~/.config.
+    """
     # Chromium reads commands from its fd 3 and writes replies to its fd 4.
     to_read, to_write = os.pipe()        # we write commands -> chromium reads (fd 3)
     from_read, from_write = os.pipe()    # chromium writes replies (fd 4) -> we read
@@ -178,7 +170,7 @@ def screenshot(chromium: str, url: str, out: Path, size, wait: float, profile: P
 
     command = [chromium, *CHROMIUM_FLAGS, f'--user-data-dir={profile}',
                f'--window-size={size[0]},{size[1]}', '--remote-debugging-pipe', 'about:blank']
-    process = subprocess.Popen(command, preexec_fn=child_fds, pass_fds=(3, 4),
+    process = subprocess.Popen(command, preexec_fn=child_fds, pass_fds=(3, 4), env=env,
                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                start_new_session=True)
     os.close(to_read)
@@ -207,7 +199,7 @@ def screenshot(chromium: str, url: str, out: Path, size, wait: float, profile: P
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('rrd', type=Path, help='the recording (a run directory\'s run.rrd)')
+    parser.add_argument('rrd', type=Path, help="the recording (a run directory's run.rrd)")
     parser.add_argument('--out', type=Path, default=ROOT / 'docs' / 'viewer.png')
     parser.add_argument('--step', type=int, default=160,
                         help='the step the time cursor is put at (default 160)')
@@ -229,19 +221,20 @@ def main(argv=None) -> int:
         tmp = Path(tmp)
         env = private_rerun_env(tmp / 'rerun')
         grpc_port, web_port = free_port(), free_port()
-        # The viewer (HTML + Wasm) from the rerun CLI; the recording over plain HTTP from here:
-        # the web viewer loads a whole .rrd file much faster than a gRPC stream of it.
-        # Compacted (the live logger writes many small chunks), with today's default layout.
+        # Compacted (a live logger writes many small chunks), without the layout stored in it:
+        # today's default layout, looping over the chosen step, is loaded beside it instead
+        # (with two layouts in play, which one the viewer activates is a race).
         recording, blueprint = tmp / 'run.rrd', tmp / 'layout.rbl'
         subprocess.run([*rerun_command(), 'rrd', 'optimize', str(args.rrd.resolve()), '-o',
-                        str(recording)], env=env, check=True, stdout=subprocess.DEVNULL,
-                       stderr=subprocess.DEVNULL)
+                        str(tmp / 'optimized.rrd')], env=env, check=True,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        application_id = recording_only(tmp / 'optimized.rrd', recording)
         # The viewer ignores a #when= fragment on a recording URL: loop the playback over the
         # chosen step instead, so the time cursor stays there.
         layout = default_blueprint(
             args.agents, args.area, play_state='playing', loop_mode='selection', fps=500.0,
             time_selection=AbsoluteTimeRange(args.step, args.step + 1))
-        layout.save(APPLICATION_ID, str(blueprint))
+        layout.save(application_id, str(blueprint))
         server = subprocess.Popen(
             [*rerun_command(), '--serve-web', '--bind', '127.0.0.1', '--port', str(grpc_port),
              '--web-viewer-port', str(web_port), str(recording), str(blueprint)],
@@ -253,7 +246,7 @@ def main(argv=None) -> int:
                 f'rerun+http://127.0.0.1:{grpc_port}/proxy', safe='')
             url = f'http://127.0.0.1:{web_port}/?url={data}'
             print(f'screenshot_viewer: {url}', flush=True)
-            screenshot(chromium, url, args.out, size, args.wait, tmp / 'chromium-profile')
+            screenshot(chromium, url, args.out, size, args.wait, tmp / 'chromium-profile', env)
         finally:
             stop(server)
     print(f'screenshot_viewer: wrote {args.out} ({args.out.stat().st_size} bytes)')

@@ -43,19 +43,24 @@ def mean_ospa_while_tracking(metrics):
 
 
 def test_single_agent_loop_detects_the_target_it_passes(single_target_runs):
-    (target,) = single_target_runs[0]['targets']
-    assert target['born'] == 3 and target['first_in_view'] == 3
-    delays = [m['targets'][0]['detection_delay'] for m in single_target_runs]
+    targets = [m['targets'][0] for m in single_target_runs]
+    assert all(t['born'] == 3 for t in targets)
+    # Born in the walk: in view at once, or a few steps later when the agent was looking at a
+    # tentative peak elsewhere when it was born.
+    assert all(t['first_in_view'] is not None and t['first_in_view'] <= 15 for t in targets)
+    delays = [t['detection_delay'] for t in targets]
     detected = [d for d in delays if d is not None and d <= 10]
-    # A plumbing check (scan -> filter -> estimate -> metrics): 5 of 10 seeds with the current
-    # filter and config/paper.yaml, see the helper report.
-    assert len(detected) >= 4, delays
+    # A plumbing and detection check (scan -> filter -> estimate -> metrics): 8 of 10 seeds with
+    # config/paper.yaml (5 of 10 before the confirmation and investigation rules; see the
+    # helper report).
+    assert len(detected) >= 7, delays
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    'issue requirement not met by the current filter: with config/paper.yaml the mean OSPA '
-    'while tracking is ~8 m over the 10 seeds (clutter-born false targets and split targets '
-    'in the PHD extraction); see the helper report. Remove this marker once it passes.'))
+    'issue requirement not met: with config/paper.yaml (the paper Q) the mean OSPA while '
+    'tracking is 3.9-9.5 m per seed, 6.6 m over the 10 seeds: the PHD mass of a tracked target '
+    '(~0.3-0.6) is hardly above that of clutter-born peaks, so tracks are lost or false ones '
+    'confirmed; see the helper report. Remove this marker once it passes.'))
 def test_single_agent_finds_and_tracks_a_moving_target_with_mean_ospa_below_2m(
         single_target_runs):
     per_seed = [mean_ospa_while_tracking(m) for m in single_target_runs]
@@ -90,9 +95,10 @@ def paper_figures(run, metrics):
     }
 
 
-UNMET = ('not met with config/paper.yaml: clutter-born false targets send the agents into '
-         'TRACK early (see the helper report for the figures and the parameter study); remove '
-         'this marker once it passes')
+UNMET = ('not met with config/paper.yaml: clutter-born false targets and looks at tentative '
+         'peaks cost the search (~34 % by k = 103), targets are seldom confirmed in time (see '
+         'the helper report for the figures and the parameter study); remove this marker once '
+         'it passes')
 
 
 @pytest.mark.xfail(strict=True, reason=UNMET)

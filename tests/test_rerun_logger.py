@@ -9,7 +9,7 @@ import pytest
 from rerun.chunk import RrdReader
 
 from sat_msgs.msg import (AgentStatus, AgentTruth, GridInfo, GroundTruth, RadioTraffic,
-                          SearchDensity, TargetEstimate, TargetTruth)
+                          SearchDensity, TargetEstimate, TargetTruth, WorldStep)
 from sat_world_sim import rerun_view
 
 AGENTS = (1, 2)
@@ -102,6 +102,50 @@ def test_rerun_view_logs_every_entity_at_every_step(tmp_path):
     assert entries[0]['modes'] == {'1': 'TRACK', '2': 'SEARCH'}
 
 
+def synthetic_messages(steps):
+    """Yield (topic, msg) of a made-up run as a bag would hold them, not in step order."""
+    for k in range(1, steps + 1):
+        truth, traffic, statuses, densities = synthetic_step(k)
+        for i in AGENTS:
+            yield f'/agent_{i}/radio/out/search_density', densities[i]
+            yield f'/agent_{i}/status', statuses[i]
+        yield '/world/radio', traffic
+        yield '/world/truth', truth
+        yield '/world/step', WorldStep(step=k, total_steps=steps, finished=k == steps)
+
+
+def test_write_rrd_replays_topic_messages_in_step_order_and_skips_what_is_missing(tmp_path):
+    steps = 5
+    # Agent 2's status of step 3 is lost; an unknown agent's and topic's messages are ignored.
+    messages = [(t, m) for t, m in synthetic_messages(steps)
+                if not (t == '/agent_2/status' and m.step == 3)]
+    messages.insert(0, ('/agent_9/status', AgentStatus(agent_id=9, step=1)))
+    messages.insert(0, ('/world/observers', None))
+    count = rerun_view.write_rrd(messages, tmp_path / 'run.rrd', AGENTS, area=(100.0, 50.0))
+    assert count == steps
+    logged, static = rrd_contents(tmp_path / 'run.rrd')
+    assert logged['map/world/truth'] == list(range(1, steps + 1))
+    assert logged['map/world/agent_1/estimates'] == list(range(1, steps + 1))
+    assert logged['map/world/agent_2/plan'] == [1, 2, 4, 5]
+    assert not any('agent_9' in entity for entity in logged)
+    assert 'map/world/area' in static
+
+
+def test_write_rrd_takes_rosbags_deserialised_messages(tmp_path):
+    from rclpy.serialization import serialize_message
+    from sat_world_sim.bag_types import sat_typestore
+    store = sat_typestore()
+    steps = 3
+    messages = []
+    for topic, msg in synthetic_messages(steps):
+        msgtype = f'sat_msgs/msg/{type(msg).__name__}'
+        messages.append((topic, store.deserialize_cdr(serialize_message(msg), msgtype)))
+    assert rerun_view.write_rrd(messages, tmp_path / 'run.rrd', AGENTS) == steps
+    logged, _ = rrd_contents(tmp_path / 'run.rrd')
+    for entity in expected_per_step(AGENTS):
+        assert logged.get(entity) == list(range(1, steps + 1)), entity
+
+
 def test_density_image_keeps_row_zero_at_origin_y_and_scales_to_uint8():
     msg = SearchDensity(values=[0.0, 0.5, 1.0, 0.25, 0.0, 0.0],
                         grid=GridInfo(origin_x=0.0, origin_y=0.0, resolution=1.0, width=3,
@@ -159,6 +203,7 @@ def test_logger_node_records_a_short_swarm_run(tmp_path):
     assert set(STATIC) <= static
 
 
+@pytest.mark.ros
 def test_logger_node_refuses_an_unknown_sink(tmp_path):
     import subprocess
     command = [sys.executable, '-m', 'sat_world_sim.logger_node', '--ros-args',

@@ -2,7 +2,9 @@
 
 ``Agent.step`` runs, at step k (the filter was predicted to k at the end of step k-1):
 
-1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k;
+1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k, with the
+   targets and tentative peaks of k-1 predicted to k for track continuity and confirmation
+   (state_extraction);
 2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation");
 3. tracking overlap: for every neighbour that, like this agent, was in TRACK at k-1, add the
    incremental score (Eqn. ospa) of the two agents' k-1 reports (poses s_{k-1} and predicted
@@ -14,7 +16,8 @@
 6. predict the SAT-PHD to k+1 with s_k (Eqn. satphd_predict) and choose the action: the search
    control (nearest admissible pose to the next node) in SEARCH, the Renyi-divergence tracking
    control (Eqn. track_control) on the predicted PHD and the predicted multi-target state
-   X-hat_{k+1|k} in TRACK;
+   X-hat_{k+1|k} in TRACK; in SEARCH with a tentative peak in view, the same tracking control
+   on that peak for up to search.investigate_steps steps (``Agent._investigation``);
 7. publish the report of step k: search density, multi-target estimate, mode (what the paper
    exchanges) with agent id, step and pose as header.
 

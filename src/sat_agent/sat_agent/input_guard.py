@@ -1,7 +1,8 @@
 """Dropped-input bookkeeping shared by the nodes.
 
 A counter per reason, rate-limited warnings, and the counters published on ``/diagnostics``
-(diagnostic_msgs/DiagnosticArray) once a second.
+(diagnostic_msgs/DiagnosticArray) every ``diagnostics_period`` seconds (a node parameter,
+default 1).
 """
 
 from collections import Counter
@@ -16,13 +17,16 @@ class InputGuard:
     """Counts what a node accepted and what it dropped, and why; reports it on /diagnostics."""
 
     def __init__(self, node, hardware_id: str):
+        period = float(node.declare_parameter('diagnostics_period', DIAGNOSTICS_PERIOD_S).value)
+        if not period > 0:
+            raise ValueError(f"parameter 'diagnostics_period' = {period}: must be > 0 (s)")
         self._node = node
         self._hardware_id = hardware_id
         self.accepted = Counter()    # topic kind -> messages taken
         self.dropped = Counter()     # reason -> messages dropped
         self._reported = 0
         self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        node.create_timer(DIAGNOSTICS_PERIOD_S, self.publish)
+        node.create_timer(period, self.publish)
 
     def accept(self, kind: str):
         """Count one valid message of this kind."""

@@ -152,7 +152,7 @@ def extract_targets(phd: ParticlePHD, pose, params: SatParams,
 
 
 def _streak(peak: np.ndarray, candidates, gate: float) -> int:
-    """Scans in a row with round(mass) >= 1 at this peak, this one included."""
+    """Count the scans in a row with round(mass) >= 1 at this peak, this one included."""
     if candidates is None or len(candidates[0]) == 0:
         return 1
     positions = np.asarray(candidates[0], dtype=float).reshape(-1, 2)

@@ -1,10 +1,14 @@
 """The logger node: streams the live graph into a Rerun recording (rerun_view has the layout).
 
 Subscribes to ``/world/step``, ``/world/truth``, ``/world/radio`` and every agent's ``status``
-and ``radio/out/search_density`` (the metrics node's subscription set and QoS). Messages are
-grouped by step; a step is logged, in order, once its truth, radio and the statuses and
-densities of its active agents are in, or once a later step is complete (a late or lost status
-is then left out). After the world's ``finished`` step it logs what is left, flushes and exits.
+and ``radio/out/search_density`` (the metrics node's subscription set and QoS, sat_agent.qos)
+and, like every observer, announces itself on ``/world/observers`` once they have all matched
+(observer.ReadyAnnouncer): world_sim counts it among its ``observers``. Messages are
+grouped by step (rerun_view.StepBuffer, which an offline replay of a bag can use as well); a
+step is logged, in order, once its truth, radio and the statuses and densities of its active
+agents are in, or once a later step is complete (a lost status is then left out). After the
+world's ``finished`` step it logs what is left (waiting at most FINAL_WAIT_S for the last
+step's data), flushes and exits.
 
 Parameters: ``run_dir`` (required), ``agent_ids`` (default [1, 2]) and ``sink``:
 
@@ -22,20 +26,19 @@ from pathlib import Path
 import subprocess
 import sys
 import time
+import urllib.parse
 
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 import rerun as rr
 
 from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
 from sat_world_sim import rerun_view
+from sat_world_sim.observer import ReadyAnnouncer
 
-WORLD_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE,
-                       durability=DurabilityPolicy.TRANSIENT_LOCAL)
-AGENT_QOS = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
 SINKS = ('file', 'viewer', 'web')
@@ -76,22 +79,19 @@ class LoggerNode(Node):
             self.recording, self.agent_ids,
             area=(self.params.area.width, self.params.area.height),
             square_side=self.params.sensor.square_side)
-        self.truths, self.traffic, self.statuses, self.densities = {}, {}, {}, {}
-        self.next_step = 1
-        self.final = None
-        self._final_at = None
-        self.create_subscription(WorldStep, '/world/step', self.on_step, WORLD_QOS)
-        self.create_subscription(GroundTruth, '/world/truth',
-                                 lambda m: self.truths.__setitem__(int(m.step), m), WORLD_QOS)
-        self.create_subscription(RadioTraffic, '/world/radio',
-                                 lambda m: self.traffic.__setitem__(int(m.step), m), WORLD_QOS)
+        self.buffer = rerun_view.StepBuffer(self.view)
+        self._finished_at = None
+        topics = [('/world/step', WorldStep, WORLD), ('/world/truth', GroundTruth, WORLD),
+                  ('/world/radio', RadioTraffic, WORLD)]
         for i in self.agent_ids:
-            self.create_subscription(
-                AgentStatus, f'/agent_{i}/status',
-                lambda m, i=i: self.statuses.__setitem__((i, int(m.step)), m), AGENT_QOS)
-            self.create_subscription(
-                SearchDensity, f'/agent_{i}/radio/out/search_density',
-                lambda m, i=i: self.densities.__setitem__((i, int(m.step)), m), AGENT_QOS)
+            topics += [(f'/agent_{i}/status', AgentStatus, STEP),
+                       (f'/agent_{i}/radio/out/search_density', SearchDensity, RADIO)]
+        subscriptions = [
+            self.create_subscription(cls, topic,
+                                     lambda msg, topic=topic: self.buffer.add(topic, msg), qos)
+            for topic, cls, qos in topics]
+        # world_sim starts step 1 once every subscription here has matched its publisher.
+        self.ready = ReadyAnnouncer(self, subscriptions)
         self.create_timer(0.1, self._tick)
         self.get_logger().info(f'logging to {self.rrd_path} (sink {sink})')
 
@@ -105,58 +105,37 @@ class LoggerNode(Node):
         url = f'rerun+http://127.0.0.1:{viewer_port}/proxy'
         if sink == 'web':
             self.get_logger().info(
-                f'web viewer (pid {self.viewer.pid}): http://127.0.0.1:{web_port}/?url={url}')
+                f'web viewer (pid {self.viewer.pid}): '
+                f'http://127.0.0.1:{web_port}/?url={urllib.parse.quote(url, safe="")}')
         else:
             self.get_logger().info(f'native viewer (pid {self.viewer.pid}) at {url}')
         return rr.GrpcSink(url)
 
-    def on_step(self, msg: WorldStep):
-        if msg.finished:
-            self.final = msg
-            self._final_at = time.monotonic()
-
-    def _complete(self, step: int) -> bool:
-        truth = self.truths.get(step)
-        if truth is None or step not in self.traffic:
-            return False
-        active = [int(a.id) for a in truth.agents if a.active and int(a.id) in self.agent_ids]
-        return all((i, step) in self.statuses and (i, step) in self.densities for i in active)
-
-    def _log(self, step: int):
-        statuses = {i: self.statuses.pop((i, step)) for i in self.agent_ids
-                    if (i, step) in self.statuses}
-        densities = {i: self.densities.pop((i, step)) for i in self.agent_ids
-                     if (i, step) in self.densities}
-        self.view.log_step(self.truths.pop(step), self.traffic.pop(step, None), statuses,
-                           densities)
-
     def _tick(self):
-        # Log every complete step in order; an incomplete one waits until a later one is in.
-        while True:
-            later = [s for s in self.truths if s > self.next_step]
-            if self.next_step in self.truths and (
-                    self._complete(self.next_step) or any(self._complete(s) for s in later)):
-                self._log(self.next_step)
-            elif self.next_step not in self.truths and any(self._complete(s) for s in later):
-                pass    # a lost truth: skip the step
-            else:
-                break
-            self.next_step += 1
-        if self.final is None:
+        self.buffer.log_ready()
+        if self.buffer.final is None:
             return
-        last = int(self.final.step)
-        if self.next_step <= last and time.monotonic() - self._final_at < FINAL_WAIT_S:
+        if self._finished_at is None:
+            self._finished_at = time.monotonic()
+        if not self.buffer.finished() and time.monotonic() - self._finished_at < FINAL_WAIT_S:
             return
-        for step in sorted(s for s in self.truths if self.next_step <= s <= last):
-            self._log(step)
+        self.buffer.log_rest()
         self.finish()
         raise RunFinished(0)
 
     def finish(self):
-        """Flush the recording to its sinks and close them."""
+        """Flush the recording to its sinks and close them (once)."""
+        if self.recording is None:
+            return
         self.recording.flush()
         self.recording.disconnect()
+        self.recording = None
         self.get_logger().info(f'wrote {self.rrd_path}')
+
+    def destroy_node(self):
+        # Ctrl-C or an external shutdown still leaves a complete run.rrd of what was logged.
+        self.finish()
+        return super().destroy_node()
 
 
 def main(args=None):

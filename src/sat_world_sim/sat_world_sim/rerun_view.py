@@ -3,7 +3,9 @@
 The functions here take the graph's messages (GroundTruth, RadioTraffic, AgentStatus,
 SearchDensity) and log them to a ``rerun.RecordingStream`` on the sequence timeline ``step``.
 They use attribute access and ``np.asarray`` only, so rclpy messages (the live ``logger`` node)
-and rosbags' deserialized messages (an offline replay of a bag) are logged by the same code.
+and rosbags' deserialized messages (an offline replay of a bag) are logged by the same code:
+``StepBuffer.add(topic, msg)`` groups either by step, and ``write_rrd(messages, path, ...)``
+turns a bag's (topic, msg) pairs into a .rrd file.
 
 Entity paths (all map entities are in world metres, x east, y north)::
 
@@ -38,10 +40,14 @@ Entity paths (all map entities are in world metres, x east, y north)::
 The metrics are the project's own: records.step_record builds the step's StepRecord and
 metrics.compute_metrics evaluates it (swarm estimate merge, OSPA), exactly as metrics.json does.
 
-Blueprint (``default_blueprint``): left, the map (area, fused density, agents, squares, links,
-trajectories, plans, truth, estimates with spread, particles); right, time series of OSPA,
-count and searched %, a mode series and the status text; below the map, one small map per agent
-with that agent's own density.
+Blueprint (``default_blueprint``), panels collapsed so the views fill the window:
+
+- left, "map": a Spatial2DView of ``map`` (everything under ``map/world`` except the agents' own
+  densities) bounded to the area plus 5 %, with the trajectories shown over all steps up to the
+  time cursor (a VisibleTimeRanges override), everything else at the cursor's step;
+- below it, "agent <i> density": one small map per agent with its own density and square;
+- right, time series "OSPA (m)" (plots/ospa), "targets: true vs estimated" (plots/count),
+  "searched (%)", "mode (0 SEARCH, 1 TRACK)" (plots/mode), and the "status" text.
 
 Analytics: ``private_rerun_env`` returns an environment whose XDG config/data dirs are a private
 directory in which ``rerun analytics disable`` has been run; viewers spawned with it (and this
@@ -64,6 +70,7 @@ import rerun.blueprint as rrb
 
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.records import MODE_NAMES, step_record
+from sat_world_sim.topics import agent_of
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
@@ -90,7 +97,7 @@ def _xy(point) -> list:
 
 
 def _ellipse(centre, cov_xy: np.ndarray, sigmas: float = SIGMAS) -> np.ndarray:
-    """Return the closed sigmas-ellipse of a 2 x 2 covariance around centre, (ELLIPSE_POINTS, 2)."""
+    """Return the closed sigmas-ellipse of a 2 x 2 covariance around centre, (N, 2) points."""
     cov = 0.5 * (cov_xy + cov_xy.T)
     values, vectors = np.linalg.eigh(cov)
     values = np.clip(values, 0.0, None)
@@ -159,7 +166,6 @@ class SwarmLogger:
         self.square_side = float(square_side)
         self._last_position: Dict[int, list] = {}
         self._previous_traffic = None
-        self._logged_steps = []
         self._log_static()
 
     def _log_static(self):
@@ -220,7 +226,6 @@ class SwarmLogger:
         entry = compute_metrics([record], '', 0)['steps'][0]
         self._log_metrics(entry)
         self._log_status_text(step, truth, statuses, entry)
-        self._logged_steps.append(step)
         return entry
 
     def _log_truth(self, truth):
@@ -232,9 +237,9 @@ class SwarmLogger:
     def _log_links(self, traffic, positions):
         strips = []
         if traffic is not None:
-            for a, b in zip(np.asarray(traffic.link_a).tolist(), np.asarray(traffic.link_b).tolist()):
-                if int(a) in positions and int(b) in positions:
-                    strips.append([positions[int(a)], positions[int(b)]])
+            pairs = zip(np.asarray(traffic.link_a).tolist(), np.asarray(traffic.link_b).tolist())
+            strips = [[positions[int(a)], positions[int(b)]] for a, b in pairs
+                      if int(a) in positions and int(b) in positions]
         self.rec.log('map/world/radio/links', rr.LineStrips2D(
             strips, colors=[LINK_COLOUR], radii=[0.25], draw_order=20.0))
 
@@ -323,6 +328,103 @@ class SwarmLogger:
                 f'{len(status.plan)} | {len(status.estimate.targets)} | '
                 f'{yielded if yielded else ""} | {1000.0 * float(status.compute_time):.0f} |')
         self.rec.log('status', rr.TextDocument('\n'.join(lines), media_type='text/markdown'))
+
+
+class StepBuffer:
+    """Groups the graph's messages by step and logs each step, in order, once it is in.
+
+    Fed like records.RunCollector (``add(topic, msg)`` with the graph's topic names), by the live
+    logger node and by an offline replay of a bag alike. A step is logged once its truth, radio
+    traffic and the status and density of each of its active agents are in, or once a later
+    step is (what is still missing then is left out); ``log_rest`` logs everything left.
+    """
+
+    def __init__(self, view: SwarmLogger):
+        self.view = view
+        self.agent_ids = view.agent_ids
+        self.truths, self.traffic, self.statuses, self.densities = {}, {}, {}, {}
+        self.next_step = 1
+        self.final = None   # the world's last WorldStep (finished = True)
+
+    def add(self, topic: str, msg) -> None:
+        """Take one message of the graph; topics it does not use are ignored."""
+        if topic == '/world/step':
+            if msg.finished:
+                self.final = msg
+        elif topic == '/world/truth':
+            self.truths[int(msg.step)] = msg
+        elif topic == '/world/radio':
+            self.traffic[int(msg.step)] = msg
+        else:
+            owner = agent_of(topic)
+            if owner is None or owner[0] not in self.agent_ids:
+                return
+            if owner[1] == 'status':
+                self.statuses[(owner[0], int(msg.step))] = msg
+            elif owner[1] == 'radio/out/search_density':
+                self.densities[(owner[0], int(msg.step))] = msg
+
+    def complete(self, step: int) -> bool:
+        """Whether step's truth, traffic and its active agents' statuses and densities are in."""
+        truth = self.truths.get(step)
+        if truth is None or step not in self.traffic:
+            return False
+        active = [int(a.id) for a in truth.agents if a.active and int(a.id) in self.agent_ids]
+        return all((i, step) in self.statuses and (i, step) in self.densities for i in active)
+
+    def log_ready(self) -> int:
+        """Log every step that is ready, in order; return how many were logged."""
+        logged = 0
+        while True:
+            later_complete = any(self.complete(s) for s in self.truths if s > self.next_step)
+            if self.next_step in self.truths and (self.complete(self.next_step)
+                                                  or later_complete):
+                self._log(self.next_step)
+                logged += 1
+            elif not later_complete:
+                return logged
+            self.next_step += 1     # logged, or its truth was lost
+
+    def finished(self) -> bool:
+        """Whether the world finished and every step up to its last one was logged."""
+        return self.final is not None and self.next_step > int(self.final.step)
+
+    def log_rest(self) -> int:
+        """Log every step still buffered, in order (the run is over); return how many."""
+        steps = sorted(self.truths)
+        for step in steps:
+            self._log(step)
+        if steps:
+            self.next_step = max(self.next_step, steps[-1] + 1)
+        return len(steps)
+
+    def _log(self, step: int):
+        statuses = {i: self.statuses.pop((i, step)) for i in self.agent_ids
+                    if (i, step) in self.statuses}
+        densities = {i: self.densities.pop((i, step)) for i in self.agent_ids
+                     if (i, step) in self.densities}
+        self.view.log_step(self.truths.pop(step), self.traffic.pop(step, None), statuses,
+                           densities)
+        for stale in [k for k in self.statuses if k[1] < step]:
+            del self.statuses[stale]
+        for stale in [k for k in self.densities if k[1] < step]:
+            del self.densities[stale]
+
+
+def write_rrd(messages, path, agent_ids, area=(100.0, 100.0), square_side: float = 10.0):
+    """Log (topic, msg) pairs of a run (e.g. a bag's, deserialised) to a .rrd file at path.
+
+    Returns the number of steps logged. The file holds the default blueprint.
+    """
+    recording = new_recording(live=False)
+    recording.save(str(path), default_blueprint=default_blueprint(agent_ids, area))
+    buffer = StepBuffer(SwarmLogger(recording, agent_ids, area, square_side))
+    for topic, msg in messages:
+        buffer.add(topic, msg)
+    count = buffer.log_ready() + buffer.log_rest()
+    recording.flush()
+    recording.disconnect()
+    return count
 
 
 def private_rerun_env(directory, base: Optional[Mapping[str, str]] = None) -> dict:
