@@ -14,7 +14,9 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
 
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
-seconds with what it has (a lost message must not stall it). Every message is validated on
+seconds with what it has (a lost message must not stall it). If world_sim dies, the agent
+holds (it sends no command, so it does not move), resumes when scans come again, and exits
+cleanly (code 0) after ``world_timeout`` seconds without a scan. Every message is validated on
 arrival (sat_agent.msg_conversions: finite numbers, lengths, the grid geometry, known modes,
 sane counts, stale or future steps, the sender); an invalid one is dropped with a rate-limited
 warning and counted per reason, and the counters go to ``/diagnostics`` every second.
@@ -35,7 +37,7 @@ from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
                                        point, report_from_parts, report_part_from_msg,
                                        report_to_msgs)
-from sat_agent.node_runner import run_nodes
+from sat_agent.node_runner import run_nodes, RunFinished
 from sat_agent.qos import RADIO, STEP
 from sat_agent.ros_params import declare_required_int, declare_sat_params
 from sat_agent.search_density import Lattice
@@ -58,6 +60,10 @@ class AgentNode(Node):
         self.agent_id = declare_required_int(self, 'agent_id', 1, 'this agent id (>= 1)')
         self.seed = self.declare_parameter('seed', 0).value
         self.report_wait_timeout = float(self.declare_parameter('report_wait_timeout', 2.0).value)
+        self.world_timeout = float(self.declare_parameter('world_timeout', 60.0).value)
+        if self.report_wait_timeout <= 0 or self.world_timeout <= 0:
+            raise ValueError("parameters 'report_wait_timeout', 'world_timeout': must be > 0")
+        self._last_scan_at = None
         self.core = None
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.last_step = 0
@@ -95,6 +101,7 @@ class AgentNode(Node):
             self.guard.drop(error.reason, f'scan of step {msg.step}: {error.detail}')
             return
         self.guard.accept('measurements')
+        self._last_scan_at = time.monotonic()
         if self._pending is not None:
             # The world moved on without our command (we were too slow): step the newest scan.
             self.guard.drop('superseded_scan', f'scan of step {self._pending[0]} never stepped')
@@ -122,6 +129,11 @@ class AgentNode(Node):
         self._try_step()
 
     def _check_wait_timeout(self):
+        if self._last_scan_at is not None and \
+                time.monotonic() - self._last_scan_at > self.world_timeout:
+            self.get_logger().warning(f'no scan for {self.world_timeout} s: world_sim is gone, '
+                                      'exiting')
+            raise RunFinished(0)
         if self._pending and time.monotonic() - self._pending[3] > self.report_wait_timeout:
             self.get_logger().warning(
                 f'step {self._pending[0]}: radio messages missing after '

@@ -1,0 +1,66 @@
+"""Faults: an agent killed with SIGKILL and respawned by the bring-up under 30 % radio loss."""
+
+import json
+import os
+import signal
+import subprocess
+import time
+
+import pytest
+import rclpy
+from ros_harness import executable, PARAMS, REPO
+
+from sat_agent.qos import WORLD
+from sat_msgs.msg import WorldStep
+
+pytestmark = pytest.mark.ros
+STEPS = 120
+KILL_AT = 30
+
+
+def agent_pid(parent: int, agent_id: int):
+    """Return the pid of the bring-up's child running agent <agent_id>, or None."""
+    result = subprocess.run(['pgrep', '-P', str(parent), '-f', f'agent_id:={agent_id}'],
+                            capture_output=True, text=True)
+    pids = [int(p) for p in result.stdout.split()]
+    return pids[0] if pids else None
+
+
+@pytest.mark.timeout(600)
+def test_kill_and_respawn_under_radio_loss_completes_the_run(tmp_path):
+    run_dir = tmp_path / 'run'
+    command = [executable('sat_world_sim', 'swarm'),
+               '--scenario', str(REPO / 'config' / 'scenarios' / 'paper.yaml'),
+               '--params', str(PARAMS), '--run-dir', str(run_dir), '--steps', str(STEPS),
+               '--respawn', '--radio-loss', '0.3', '--agent-timeout', '3', '--quiet',
+               '--domain-id', os.environ['ROS_DOMAIN_ID']]
+    rclpy.init()
+    node = rclpy.create_node('fault_injector')
+    steps = []
+    node.create_subscription(WorldStep, '/world/step', lambda m: steps.append(m.step), WORLD)
+    swarm = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
+    try:
+        deadline = time.monotonic() + 180
+        while (not steps or steps[-1] < KILL_AT) and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.05)
+        victim = agent_pid(swarm.pid, 2)
+        assert steps and victim is not None, 'the run never reached the kill step'
+        os.kill(victim, signal.SIGKILL)
+        out, err = swarm.communicate(timeout=480)
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+        if swarm.poll() is None:
+            os.killpg(swarm.pid, signal.SIGKILL)
+            swarm.wait()
+    assert swarm.returncode == 0, err[-3000:]
+    assert out.strip().splitlines()[-1] == str(run_dir)
+    assert 'agent_2 exited (-9): respawn 1' in err
+    metrics = json.loads((run_dir / 'metrics.json').read_text())
+    assert [s['step'] for s in metrics['steps']] == list(range(1, STEPS + 1))
+    # The respawned agent rejoined: it reports modes again by the end of the run.
+    assert set(metrics['steps'][-1]['modes']) == {'1', '2'}
+    missing = [s['step'] for s in metrics['steps'] if set(s['modes']) != {'1', '2'}]
+    assert missing and max(missing) < STEPS, 'agent 2 was never away, or never came back'
+    assert (run_dir / 'bag' / 'metadata.yaml').is_file()
