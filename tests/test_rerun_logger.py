@@ -2,11 +2,12 @@
 
 from collections import defaultdict
 import math
-import sys
+import subprocess
 
 from geometry_msgs.msg import Point
 import pytest
 from rerun.chunk import RrdReader
+from ros_harness import executable, PARAMS, REPO, started
 
 from sat_msgs.msg import (AgentStatus, AgentTruth, GridInfo, GroundTruth, RadioTraffic,
                           SearchDensity, TargetEstimate, TargetTruth, WorldStep)
@@ -173,15 +174,13 @@ def test_private_rerun_env_turns_analytics_off_outside_the_home_config(tmp_path)
 @pytest.mark.ros
 @pytest.mark.timeout(240)
 def test_logger_node_records_a_short_swarm_run(tmp_path):
-    from ros_harness import executable, PARAMS, REPO, started
     steps = 15
     scenario = REPO / 'config' / 'scenarios' / 'paper.yaml'
     run_dir = tmp_path / 'run'
     world = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
              str(PARAMS), '-p', f'scenario:={scenario}', '-p', f'steps:={steps}',
              '-p', 'observers:=1']
-    # TODO(lead): switch to executable('sat_world_sim', 'logger') once setup.py registers it.
-    logger = [sys.executable, '-m', 'sat_world_sim.logger_node', '--ros-args',
+    logger = [executable('sat_world_sim', 'logger'), '--ros-args',
               '--params-file', str(PARAMS), '-p', f'run_dir:={run_dir}',
               '-p', 'agent_ids:=[1,2]']
 
@@ -205,8 +204,7 @@ def test_logger_node_records_a_short_swarm_run(tmp_path):
 
 @pytest.mark.ros
 def test_logger_node_refuses_an_unknown_sink(tmp_path):
-    import subprocess
-    command = [sys.executable, '-m', 'sat_world_sim.logger_node', '--ros-args',
+    command = [executable('sat_world_sim', 'logger'), '--ros-args',
                '-p', f'run_dir:={tmp_path}', '-p', 'sink:=screen']
     result = subprocess.run(command, capture_output=True, text=True, timeout=60)
     assert result.returncode == 2

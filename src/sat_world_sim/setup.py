@@ -27,6 +27,7 @@ setup(
     entry_points={
         'console_scripts': [
             'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
+            'logger = sat_world_sim.logger_node:main',
             'metrics = sat_world_sim.metrics_node:main',
             'recorder = sat_world_sim.recorder_node:main',
             'replay = sat_world_sim.bag_replay:main',

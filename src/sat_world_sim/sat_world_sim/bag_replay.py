@@ -13,8 +13,8 @@ Offline (no ROS graph is started)::
     replay runs/<name>/bag --offline --out runs/<name>-replay [--params config/paper.yaml]
 
 feeds the bag's messages to records.RunCollector, the code the live metrics node runs, and
-writes ``metrics.json`` and ``plots/*.png`` (and ``run.rrd`` when the Rerun view is available),
-equal to the live run's. The last line printed is the output directory.
+writes ``metrics.json`` and ``plots/*.png`` equal to the live run's, and ``run.rrd`` through the
+same Rerun view the live logger uses. The last line printed is the output directory.
 """
 
 import argparse
@@ -28,6 +28,7 @@ from rosbags.rosbag2 import Reader
 
 from sat_agent.config import load_params_file, ParameterError, SatParams
 
+from sat_world_sim import rerun_view
 from sat_world_sim.bag_types import sat_typestore
 from sat_world_sim.records import RunCollector
 from sat_world_sim.topics import agent_of, Topic, world_topics
@@ -59,19 +60,26 @@ def raw_messages(reader: Reader, connections) -> Iterator[Tuple[object, int, byt
     yield from reader.messages(connections=connections)
 
 
-def collect(bag: Path) -> RunCollector:
-    """Read a bag into a RunCollector (deserialising with the sat_msgs typestore)."""
+def deserialized(bag: Path) -> Iterator[Tuple[str, object]]:
+    """Yield (topic, message) of a bag in time order, deserialised with the sat_msgs types."""
     store = sat_typestore()
     with Reader(bag) as reader:
-        collector = RunCollector(bag_agent_ids(reader))
         for connection, _, raw in raw_messages(reader, reader.connections):
-            collector.add(connection.topic, store.deserialize_cdr(raw, connection.msgtype))
-    return collector
+            yield connection.topic, store.deserialize_cdr(raw, connection.msgtype)
 
 
 def replay_offline(bag: Path, out: Path, params: SatParams) -> dict:
-    """Write metrics.json and plots from a bag."""
-    return collect(bag).write(out, (params.area.width, params.area.height))
+    """Write metrics.json, plots and run.rrd from a bag, as the live metrics and logger do."""
+    with Reader(bag) as reader:
+        agent_ids = bag_agent_ids(reader)
+    collector = RunCollector(agent_ids)
+    for topic, msg in deserialized(bag):
+        collector.add(topic, msg)
+    area = (params.area.width, params.area.height)
+    metrics = collector.write(out, area)
+    rerun_view.write_rrd(deserialized(bag), out / 'run.rrd', agent_ids, area,
+                         params.sensor.square_side)
+    return metrics
 
 
 def deep(profile):

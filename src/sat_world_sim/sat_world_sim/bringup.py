@@ -2,8 +2,9 @@
 
 Starts, each as its own process running the installed executable (as ``ros2 run`` would):
 ``world_sim`` (truth, sensors, radio), ``metrics`` (metrics.json and plots), ``recorder`` (every
-topic into ``<run-dir>/bag``, unless ``--no-record``) and one ``agent`` per scenario agent (or
-all agents in one ``agents_composed`` process with ``--composed``).
+topic into ``<run-dir>/bag``, unless ``--no-record``), ``logger`` (Rerun: ``<run-dir>/run.rrd``,
+and a live viewer with ``--view viewer|web``; none with ``--no-view``) and one ``agent`` per
+scenario agent (or all agents in one ``agents_composed`` process with ``--composed``).
 Every process gets the same parameter file, a private ROS_DOMAIN_ID (unless one is given) and
 localhost-only discovery; their output goes to ``<run-dir>/logs/<name>.log`` and (unless
 ``--quiet``) to stderr with a ``[name]`` prefix.
@@ -123,6 +124,10 @@ def build_children(args, agent_ids) -> List[Child]:
     if not args.no_record:
         observers.append(Child('recorder', [executable('sat_world_sim', 'recorder'),
                                             '--ros-args', *run_dir], observer=True))
+    if not args.no_view:
+        observers.append(Child('logger', [executable('sat_world_sim', 'logger'), '--ros-args',
+                                          *params, *run_dir, '-p', f'sink:={args.view}'],
+                               observer=True))
     world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *params,
              '-p', f'scenario:={Path(args.scenario).resolve()}', '-p', f'clock:={args.clock}',
              '-p', f'period:={args.period}', '-p', f'agent_timeout:={args.agent_timeout}',
@@ -195,6 +200,10 @@ def parse_args(argv):
                         help='all agents in one process (one executor)')
     parser.add_argument('--respawn', action='store_true', help='restart crashed agents')
     parser.add_argument('--no-record', action='store_true', help='do not record a bag')
+    parser.add_argument('--view', choices=('file', 'viewer', 'web'), default='file',
+                        help='Rerun sink: run.rrd only, a native viewer, or the web viewer '
+                             'on 127.0.0.1 (run.rrd is written in every case)')
+    parser.add_argument('--no-view', action='store_true', help='no Rerun logger')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID (default: a private one for this run)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')

@@ -1,0 +1,178 @@
+"""Hostile input at a live world_sim: garbage on every agent's cmd and radio/out topics.
+
+This test plays both agents of a head-on scenario and, at every step, throws a hypothesis-drawn
+batch of invalid messages at world_sim before the agents' real answers (each on the same
+publisher as a real answer, so DDS delivers it first and the world is still at that step).
+world_sim must survive, keep stepping, forward nothing invalid, and count every invalid message
+under its reason on /diagnostics.
+"""
+
+import math
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Point
+from hypothesis import given, HealthCheck, settings, strategies as st
+import numpy as np
+import pytest
+import rclpy
+from ros_harness import executable, PARAMS, started, write_scenario
+
+from sat_agent.qos import RADIO, STEP
+from sat_msgs.msg import (AgentMode, ControlCommand, MeasurementSet, MultiTargetEstimate,
+                          SearchDensity, TargetEstimate)
+
+pytestmark = pytest.mark.ros
+STEPS = 60            # one hypothesis example per step
+BATCH = 170           # 60 x 170 > 10,000 invalid messages
+CELLS = 100 * 100
+KINDS = {'search_density': SearchDensity, 'estimate': MultiTargetEstimate, 'mode': AgentMode}
+DEFECTS = {
+    'cmd': ('wrong_agent_id', 'stale_step', 'future_step', 'duplicate'),
+    'search_density': ('wrong_agent_id', 'stale_step', 'future_step', 'nan', 'wrong_length',
+                       'grid_mismatch', 'above_one'),
+    'estimate': ('wrong_agent_id', 'future_step', 'nan_position', 'negative_cardinality'),
+    'mode': ('wrong_agent_id', 'stale_step', 'unknown_mode'),
+}
+REASON = {'nan': 'out_of_range', 'above_one': 'out_of_range', 'wrong_length': 'wrong_length',
+          'grid_mismatch': 'grid_mismatch', 'nan_position': 'non_finite',
+          'negative_cardinality': 'out_of_range', 'unknown_mode': 'unknown_mode'}
+recipe = st.tuples(st.sampled_from((1, 2)), st.sampled_from(sorted(DEFECTS))).flatmap(
+    lambda pair: st.tuples(st.just(pair[0]), st.just(pair[1]),
+                           st.sampled_from(DEFECTS[pair[1]])))
+
+
+def message(topic, agent, step, defect):
+    """Build one message for /agent_<agent>/<topic> at world step `step` with one defect."""
+    sender = 3 - agent if defect == 'wrong_agent_id' else agent
+    step = {'stale_step': step - 1, 'future_step': step + 1}.get(defect, step)
+    if topic == 'cmd':
+        return ControlCommand(agent_id=sender, step=max(step, 0), action_index=0)
+    if topic == 'search_density':
+        values = np.zeros(CELLS - (defect == 'wrong_length'), dtype=np.float32)
+        values[0] = {'nan': math.nan, 'above_one': 2.0}.get(defect, 0.0)
+        msg = SearchDensity(agent_id=sender, step=max(step, 0), values=values)
+        msg.grid.resolution = 3.0 if defect == 'grid_mismatch' else 1.0
+        msg.grid.width = msg.grid.height = 100
+        return msg
+    if topic == 'estimate':
+        target = TargetEstimate(weight=1.0)
+        target.position.x = math.nan if defect == 'nan_position' else 1.0
+        return MultiTargetEstimate(agent_id=sender, step=max(step, 0), targets=[target],
+                                   cardinality=-1.0 if defect == 'negative_cardinality' else 1.0)
+    return AgentMode(agent_id=sender, step=max(step, 0), mode=9 if defect == 'unknown_mode'
+                     else 0, position=Point(x=1.0, y=1.0))
+
+
+class ScriptedAgents:
+    """Both agents: answer every scan correctly, after the step's batch of garbage."""
+
+    def __init__(self, node):
+        self.node = node
+        self.scans = {}
+        self.counters = {}
+        self.pubs = {}
+        for i in (1, 2):
+            ns = f'/agent_{i}'
+            self.pubs[(i, 'cmd')] = node.create_publisher(ControlCommand, f'{ns}/cmd', STEP)
+            for kind, cls in KINDS.items():
+                self.pubs[(i, kind)] = node.create_publisher(cls, f'{ns}/radio/out/{kind}',
+                                                             RADIO)
+                node.create_subscription(cls, f'{ns}/radio/in/{kind}', self.on_forwarded, RADIO)
+            node.create_subscription(MeasurementSet, f'{ns}/measurements',
+                                     lambda m: self.scans.setdefault(m.step, set()).add(
+                                         m.agent_id), STEP)
+        node.create_subscription(DiagnosticArray, '/diagnostics', self.on_diagnostics, 50)
+        self.forwarded_bad = 0
+
+    def on_forwarded(self, msg):
+        # The radio must never forward anything: the test's valid reports carry 'mode' 0
+        # and sane values, garbage would show up here with a defect.
+        if isinstance(msg, SearchDensity) and (len(msg.values) != CELLS or
+                                               not np.all(np.isfinite(msg.values))):
+            self.forwarded_bad += 1
+
+    def on_diagnostics(self, msg):
+        for status in msg.status:
+            if status.name == '/world_sim: input':
+                self.counters = {v.key: int(v.value) for v in status.values}
+
+    def answer(self, agent, step):
+        for kind in KINDS:
+            self.pubs[(agent, kind)].publish(message(kind, agent, step, None))
+        self.pubs[(agent, 'cmd')].publish(message('cmd', agent, step, None))
+
+
+@pytest.fixture(scope='module')
+def world(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp('fuzz_world')
+    scenario = write_scenario(tmp / 'fuzz.yaml', name='fuzz', seed=1, steps=STEPS + 5,
+                              truth_process_noise=0.0,
+                              agents=[{'id': 1, 'start': [10.0, 50.0]},
+                                      {'id': 2, 'start': [30.0, 50.0]}])
+    command = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
+               str(PARAMS), '-p', f'scenario:={scenario}', '-p', 'observers:=0',
+               '-p', 'diagnostics_period:=0.1', '-p', 'agent_timeout:=30.0']
+    rclpy.init()
+    node = rclpy.create_node('world_fuzzer')
+    agents = ScriptedAgents(node)
+    with started(command, tmp / 'world_sim.log') as process:
+        agents.process = process
+        agents.step = 1
+        agents.sent = {}
+        yield agents
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def spin_until(node, done, timeout=30.0):
+    deadline = time.monotonic() + timeout
+    while not done() and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.02)
+    return done()
+
+
+@pytest.mark.timeout(900)
+@settings(max_examples=STEPS, deadline=None, derandomize=True,
+          suppress_health_check=list(HealthCheck))
+@given(batch=st.lists(recipe, min_size=BATCH, max_size=BATCH))
+def test_world_sim_survives_and_counts_every_invalid_message(world, batch):
+    k = world.step
+    assert spin_until(world.node, lambda: world.scans.get(k) == {1, 2}), f'no scans of step {k}'
+    for agent, topic, defect in batch:
+        if defect == 'duplicate':
+            continue     # sent after the real answer, below
+        world.pubs[(agent, topic)].publish(message(topic, agent, k, defect))
+        reason = REASON.get(defect, defect)
+        world.sent[reason] = world.sent.get(reason, 0) + 1
+    duplicates = [agent for agent, _, defect in batch if defect == 'duplicate']
+    for agent in (1, 2):
+        world.answer(agent, k)
+    for agent in duplicates:
+        world.pubs[(agent, 'cmd')].publish(message('cmd', agent, k, None))
+    world.sent['duplicate'] = world.sent.get('duplicate', 0) + len(duplicates)
+    world.step = k + 1
+
+    def counted():
+        dropped = {key[len('dropped.'):]: n for key, n in world.counters.items()
+                   if key.startswith('dropped.')}
+        return {key: n for key, n in dropped.items() if key != 'stale_step'}
+    expected = {key: n for key, n in world.sent.items() if key != 'stale_step'}
+    # Duplicates of a command can land after the world advanced: then they are stale, not
+    # duplicates; so duplicates and stale steps are checked together.
+    together = world.sent.get('stale_step', 0) + world.sent['duplicate']
+    expected.pop('duplicate')
+    spin_until(world.node, lambda: (
+        {k_: n for k_, n in counted().items() if k_ != 'duplicate'} == expected
+        and world.counters.get('dropped.stale_step', 0) +
+        world.counters.get('dropped.duplicate', 0) == together), timeout=20.0)
+    assert world.process.poll() is None, 'world_sim died'
+    assert {key: n for key, n in counted().items() if key != 'duplicate'} == expected
+    assert world.counters.get('dropped.stale_step', 0) + world.counters.get(
+        'dropped.duplicate', 0) == together
+    assert world.counters.get('accepted.cmd') == 2 * k
+    assert world.forwarded_bad == 0
+
+
+def test_more_than_ten_thousand_invalid_messages(world):
+    assert sum(world.sent.values()) >= 10_000
