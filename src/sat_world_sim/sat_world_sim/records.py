@@ -6,7 +6,7 @@ metrics computed either way are equal.
 """
 
 from pathlib import Path
-from typing import List, Mapping, Optional, Sequence
+from typing import List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -64,6 +64,22 @@ def density_values(msg) -> Optional[np.ndarray]:
     return values.reshape(int(msg.grid.height), int(msg.grid.width))
 
 
+def route(topic: str, agent_ids) -> Optional[Tuple[str, Optional[int]]]:
+    """Return which part of a run a topic feeds, as (kind, agent id or None).
+
+    ('step' | 'truth' | 'radio', None) for the world's topics, ('status' | 'density', agent id)
+    for an agent's status and search density, None for the rest. The metrics (RunCollector) and the Rerun view (rerun_view.StepBuffer) read the same topics.
+    """
+    world = {'/world/step': 'step', '/world/truth': 'truth', '/world/radio': 'radio'}
+    if topic in world:
+        return world[topic], None
+    owner = agent_of(topic)
+    if owner is None or owner[0] not in agent_ids:
+        return None
+    kind = {'status': 'status', 'radio/out/search_density': 'density'}.get(owner[1])
+    return (kind, owner[0]) if kind else None
+
+
 class RunCollector:
     """Gathers one run's messages by topic and turns them into metrics.json and plots.
 
@@ -78,21 +94,17 @@ class RunCollector:
 
     def add(self, topic: str, msg) -> None:
         """Take one message of the graph; topics it does not use are ignored."""
-        if topic == '/world/step':
-            if msg.finished:
-                self.final = msg
-        elif topic == '/world/truth':
+        kind, agent = route(topic, self.agent_ids) or (None, None)
+        if kind == 'step' and msg.finished:
+            self.final = msg
+        elif kind == 'truth':
             self.truths[int(msg.step)] = msg
-        elif topic == '/world/radio':
+        elif kind == 'radio':
             self.traffic[int(msg.step)] = msg
-        else:
-            owner = agent_of(topic)
-            if owner is None or owner[0] not in self.agent_ids:
-                return
-            if owner[1] == 'status':
-                self.statuses[(owner[0], int(msg.step))] = msg
-            elif owner[1] == 'radio/out/search_density':
-                self.densities[owner[0]] = msg
+        elif kind == 'status':
+            self.statuses[(agent, int(msg.step))] = msg
+        elif kind == 'density':
+            self.densities[agent] = msg     # only the last one is shown (final density plot)
 
     def complete(self) -> bool:
         """Whether the run finished and its last step's truth, traffic and statuses are in."""

@@ -69,8 +69,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.records import MODE_NAMES, step_record
-from sat_world_sim.topics import agent_of
+from sat_world_sim.records import MODE_NAMES, route, step_record
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
@@ -348,21 +347,16 @@ class StepBuffer:
 
     def add(self, topic: str, msg) -> None:
         """Take one message of the graph; topics it does not use are ignored."""
-        if topic == '/world/step':
-            if msg.finished:
-                self.final = msg
-        elif topic == '/world/truth':
+        kind, agent = route(topic, self.agent_ids) or (None, None)
+        if kind == 'step' and msg.finished:
+            self.final = msg
+        elif kind == 'truth':
             self.truths[int(msg.step)] = msg
-        elif topic == '/world/radio':
+        elif kind == 'radio':
             self.traffic[int(msg.step)] = msg
-        else:
-            owner = agent_of(topic)
-            if owner is None or owner[0] not in self.agent_ids:
-                return
-            if owner[1] == 'status':
-                self.statuses[(owner[0], int(msg.step))] = msg
-            elif owner[1] == 'radio/out/search_density':
-                self.densities[(owner[0], int(msg.step))] = msg
+        elif kind in ('status', 'density'):
+            store = self.statuses if kind == 'status' else self.densities
+            store[(agent, int(msg.step))] = msg
 
     def complete(self, step: int) -> bool:
         """Whether step's truth, traffic and its active agents' statuses and densities are in."""
