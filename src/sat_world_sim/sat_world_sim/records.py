@@ -68,7 +68,8 @@ def route(topic: str, agent_ids) -> Optional[Tuple[str, Optional[int]]]:
     """Return which part of a run a topic feeds, as (kind, agent id or None).
 
     ('step' | 'truth' | 'radio', None) for the world's topics, ('status' | 'density', agent id)
-    for an agent's status and search density, None for the rest. The metrics (RunCollector) and the Rerun view (rerun_view.StepBuffer) read the same topics.
+    for an agent's status and search density, None for the rest. The metrics (RunCollector)
+    and the Rerun view (rerun_view.StepBuffer) read the same topics.
     """
     world = {'/world/step': 'step', '/world/truth': 'truth', '/world/radio': 'radio'}
     if topic in world:
