@@ -210,3 +210,17 @@ def test_logger_node_refuses_an_unknown_sink(tmp_path):
     assert result.returncode == 2
     assert "parameter 'sink' = 'screen'" in result.stderr
     assert 'file, viewer, web' in result.stderr
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_paper_run_recording_has_every_entity_at_every_step(paper_run):
+    run_dir, code, _, output = paper_run
+    assert code == 0, output[-3000:]
+    logged, static = rrd_contents(run_dir / 'run.rrd')
+    for entity in expected_per_step(AGENTS):
+        assert logged.get(entity) == list(range(1, 201)), entity
+    for i in AGENTS:
+        assert logged[f'map/world/agent_{i}/trajectory'] == list(range(2, 201))
+    assert set(STATIC) <= static
