@@ -101,19 +101,35 @@ def test_a_neighbour_leaving_search_releases_its_nodes():
     assert len(after) > len(before) + 20
 
 
-def test_stale_foreign_and_malformed_reports_are_dropped():
+def test_late_reports_only_add_their_density():
+    params = small_params()
+    agent = Agent(1, params, (50.0, 50.0), seed=1)
+    other = Agent(2, params, (20.0, 20.0), seed=1)
+    late = other.step(1, (20.0, 20.0), NO_MEASUREMENTS, []).report
+    agent.step(1, (50.0, 50.0), NO_MEASUREMENTS, [])
+    agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [])
+    # A report of step 1 read at step 3 (two steps of radio latency).
+    out = agent.step(3, (50.0, 50.0), NO_MEASUREMENTS, [late])
+    assert np.all(out.report.search_values >= late.search_values * 0.999 - 1e-6)
+    assert late.search_values.max() == 1.0
+    assert out.replan != ReplanReason.NEW_NEIGHBOUR and agent.planner.group == {1}
+    assert agent.dropped_reports == 0
+
+
+def test_foreign_and_malformed_reports_are_dropped():
     params = small_params()
     agent = Agent(1, params, (50.0, 50.0), seed=1)
     other = Agent(2, params, (60.0, 50.0), seed=1)
     report = other.step(1, (60.0, 50.0), NO_MEASUREMENTS, []).report
     agent.step(1, (50.0, 50.0), NO_MEASUREMENTS, [])
-    stale = dataclasses.replace(report, step=0)
     bad_shape = dataclasses.replace(report, search_values=np.zeros((3, 3)))
     nan_pose = dataclasses.replace(report, pose=np.array([np.nan, 1.0]))
     own = dataclasses.replace(report, agent_id=1)
-    out = agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [stale, bad_shape, nan_pose, own, report,
+    future = dataclasses.replace(report, step=5)
+    out = agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [future, bad_shape, nan_pose, own, report,
                                                         report])
-    assert agent.dropped_reports == 5
+    # Ignored: the future report; dropped: bad shape, NaN pose, own id, the second copy.
+    assert agent.dropped_reports == 4
     assert out.replan == ReplanReason.NEW_NEIGHBOUR
 
 

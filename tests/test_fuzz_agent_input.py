@@ -25,6 +25,7 @@ SENDER = 2
 CELLS = 100 * 100
 BATCHES = 50
 BATCH = 200          # 50 x 200 = 10,000 messages
+STALE_BY = 10        # older than the agent's window for late reports (MAX_REPORT_LAG)
 RADIO_DEFECTS = ('own_report', 'unknown_sender', 'future_step', 'stale_step')
 DENSITY_DEFECTS = ('nan', 'above_one', 'negative', 'wrong_length', 'grid_mismatch')
 ESTIMATE_DEFECTS = ('nan_position', 'inf_weight', 'negative_cardinality', 'too_many_targets')
@@ -113,7 +114,7 @@ class Fuzzer:
 
     def radio(self, kind, defect, rng):
         sender, step = SENDER, self.scan_step
-        if defect == 'stale_step' and self.scan_step < 3:
+        if defect == 'stale_step' and self.scan_step < STALE_BY:
             defect = 'future_step'
         if defect == 'own_report':
             sender = AGENT
@@ -122,7 +123,7 @@ class Fuzzer:
         elif defect == 'future_step':
             step = self.scan_step + 5
         elif defect == 'stale_step':
-            step = self.scan_step - 3
+            step = self.scan_step - STALE_BY
         if kind == 'search_density':
             msg = density(sender, step, defect, rng)
         elif kind == 'estimate':

@@ -169,9 +169,15 @@ class Agent:
         return self.modes.mode
 
     def step(self, step: int, pose, measurements, inbox: Sequence[AgentReport]) -> AgentOutput:
-        """Run one step k (module docstring); inbox holds the neighbours' reports of step k-1."""
+        """Run one step k (module docstring); inbox holds the neighbours' reports.
+
+        Reports of step k-1 take part in everything; older ones (a radio with latency) only add
+        their search density: the fusion by max is right whatever the density's age, whereas
+        joint plans and the overlap test need the same step on every side.
+        """
         pose = np.asarray(pose, dtype=float).reshape(2)
         measurements = np.asarray(measurements, dtype=float).reshape(-1, 2)
+        late = self._valid_reports(step, inbox, late=True)
         reports = self._valid_reports(step, inbox)
         self.filter.correct(measurements, pose)
         estimate = extract_targets(self.filter.targets, pose, self.params,
@@ -182,7 +188,7 @@ class Agent:
         self._expected = _predicted_positions(estimate.targets, dt)
         self._candidates = (_predicted_positions(estimate.tentative, dt),
                             np.array(estimate.tentative_streaks, dtype=int))
-        for report in reports:
+        for report in late + reports:
             self.filter.search.fuse(report.search_values)
         searchers = self._searchers(reports)
         was_tracking = self.modes.mode == Mode.TRACK
@@ -252,12 +258,20 @@ class Agent:
         self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
         return MultiTargetEstimate(self._look, 0.0)
 
-    def _valid_reports(self, step: int, inbox: Sequence[AgentReport]) -> List[AgentReport]:
-        """Keep the well-formed reports of step k-1 from other agents, one per sender, by id."""
+    def _valid_reports(self, step: int, inbox: Sequence[AgentReport],
+                       late: bool = False) -> List[AgentReport]:
+        """Keep well-formed reports from other agents, one per sender, ordered by id.
+
+        Reports of step k-1; with late, the newest older one of each sender instead. Malformed
+        reports and second k-1 reports of a sender are counted in dropped_reports.
+        """
         shape = self.filter.search.values.shape
         kept = {}
-        for report in inbox:
-            good = (report.step == step - 1 and report.agent_id != self.agent_id
+        for report in sorted(inbox, key=lambda r: -r.step):
+            in_time = report.step < step - 1 if late else report.step == step - 1
+            if not in_time or (late and report.agent_id in kept):
+                continue
+            good = (report.agent_id != self.agent_id
                     and report.agent_id not in kept
                     and np.shape(report.search_values) == shape
                     and np.all(np.isfinite(report.search_values))

@@ -49,6 +49,9 @@ RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, Agent
 STATUS_PARTICLES = 300
 # A scan further ahead than this is garbage, not a world that ran on without us.
 MAX_STEP_JUMP = 1000
+# Reports older than this many steps are stale; younger late ones (radio latency) still add
+# their search density (Agent.step).
+MAX_REPORT_LAG = 4
 
 
 class AgentNode(Node):
@@ -112,7 +115,7 @@ class AgentNode(Node):
         if msg.agent_id == self.agent_id:
             self.guard.drop('own_report', f'{kind} from this agent came back')
             return
-        if msg.step + 1 < self.last_step:
+        if msg.step + MAX_REPORT_LAG < self.last_step:
             self.guard.drop('stale_step', f'{kind} of step {msg.step} at step {self.last_step}')
             return
         if msg.step > self.last_step + 1:
@@ -146,10 +149,10 @@ class AgentNode(Node):
             self._step()
 
     def _inbox(self, step: int):
-        """Complete reports (all three kinds) of step k-1; older or partial ones are dropped."""
+        """Complete reports (all three kinds) sent before step k; partial ones are dropped."""
         reports = []
         for (sender, sent), parts in sorted(self._radio.items()):
-            if sent != step - 1:
+            if sent >= step:
                 continue
             if len(parts) < len(REPORT_KINDS):
                 self.guard.drop('partial_report',
