@@ -311,3 +311,22 @@ def test_following_the_walk_with_search_control_visits_every_node():
     assert visited == set(ALL_NODES)
     # 100 nodes 10 m apart at up to 4 m per step: a sweep takes about 250 steps.
     assert step < 350
+
+
+def test_with_every_node_searched_the_agent_revisits_the_least_searched_ones():
+    params = SatParams()
+    search_map = SearchMap.for_area(params.area, params.search.node_spacing)
+    planner = SearchPlanner(search_map, params)
+    values = np.linspace(0.6, 1.0, search_map.size)    # all above beta: nothing unvisited
+    planner.needs_replan(frozenset({1}), released=False)
+    walk = planner.plan(1, {1: (50.0, 50.0)}, values)
+    share = params.search.revisit_share
+    assert sorted(walk) == list(range(int(np.ceil(share * search_map.size))))
+    # Revisited nodes stay in the walk while their value only decays...
+    planner.mark_visited((500.0, 500.0), values * params.search.decay)
+    assert len(planner.walk) == len(walk)
+    # ...and leave it once someone searched them (their value rose).
+    searched = values.copy()
+    searched[walk[0]] = 1.0
+    planner.mark_visited((500.0, 500.0), searched)
+    assert walk[0] not in planner.walk and len(planner.walk) == len(walk) - 1

@@ -189,6 +189,10 @@ class SearchParams:
     # its region seen recently"; a fully searched region takes ln(0.5)/ln(0.999) ~ 693 steps to
     # need a revisit.
     unvisited_threshold: float = 0.5
+    # When no node is unvisited (all searched within ln(beta)/ln(J) steps), plan over this share
+    # of the nodes, the least recently searched, instead of idling: targets are born at any time
+    # and the paper's agents keep searching after their first sweep (its Fig. 4h).
+    revisit_share: float = 0.5
     # Steps a searching agent may spend looking at one tentative peak (agent_core): enough
     # for confirm_scans more scans from a stand-off, short enough to keep the search going.
     investigate_steps: int = 4
@@ -198,6 +202,7 @@ class SearchParams:
         _check(f'{prefix}.lattice_spacing', self.lattice_spacing, 0, INF, low_open=True)
         _check(f'{prefix}.node_spacing', self.node_spacing, 0, INF, low_open=True)
         _check(f'{prefix}.unvisited_threshold', self.unvisited_threshold, 0, 1, high_open=True)
+        _check(f'{prefix}.revisit_share', self.revisit_share, 0, 1)
         _check(f'{prefix}.investigate_steps', self.investigate_steps, 0, 10000)
 
 

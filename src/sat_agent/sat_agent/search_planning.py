@@ -29,12 +29,15 @@ import numpy as np
 
 from sat_agent.actions import admissible_mask, candidate_poses
 from sat_agent.config import SatParams
-from sat_agent.search_map import SearchMap, unvisited_nodes
+from sat_agent.search_map import nodes_to_search, SearchMap
 from sat_agent.sensor_model import in_sensing_square
 
 # Costs are compared after rounding to this many decimals (1e-9 m): far below any distance
 # that matters, far above float64 rounding error on distances of a few km.
 COST_DECIMALS = 9
+# A node's search value only decays while nobody looks at it; a rise beyond float noise means an
+# agent searched it.
+REVISIT_MARGIN = 1e-6
 
 
 def _costs(head, points: np.ndarray) -> np.ndarray:
@@ -160,6 +163,7 @@ class SearchPlanner:
         self._start = None
         self._group = frozenset()
         self._claims = np.zeros(0, dtype=np.int64)
+        self._planned = None     # every node's search value when the walk was planned
         self._reason = ReplanReason.NO_PLAN
 
     @property
@@ -180,8 +184,9 @@ class SearchPlanner:
     def mark_visited(self, pose, node_values=None) -> np.ndarray:
         """Drop the walk's nodes whose centre is in the sensing square at pose; return them.
 
-        With node_values (fused search values), nodes whose value rose above beta (searched by
-        another agent) are dropped too.
+        With node_values (fused search values), nodes another agent searched meanwhile are dropped
+        too: their value rose above beta and above the value they had when planned (nodes being
+        revisited, search.revisit_share, were planned above beta).
         """
         centers = self._map.centers[self._walk]
         visited = in_sensing_square(centers, _point(pose), self._params.sensor.square_side)
@@ -189,8 +194,10 @@ class SearchPlanner:
             values = np.asarray(node_values, dtype=float).reshape(-1)
             if values.size != self._map.size:
                 raise ValueError(f'{values.size} search values for {self._map.size} nodes')
-            values = values[self._walk]
-            visited |= values > self._params.search.unvisited_threshold
+            threshold = np.full(self._walk.size, self._params.search.unvisited_threshold)
+            if self._planned is not None:
+                threshold = np.maximum(threshold, self._planned[self._walk] + REVISIT_MARGIN)
+            visited |= values[self._walk] > threshold
         dropped = self._walk[visited]
         self._walk = self._walk[~visited]
         return dropped
@@ -231,7 +238,8 @@ class SearchPlanner:
         values = np.asarray(node_values, dtype=float).reshape(-1)
         if values.size != self._map.size:
             raise ValueError(f'{values.size} search values for {self._map.size} nodes')
-        nodes = unvisited_nodes(values, self._params.search.unvisited_threshold)
+        search = self._params.search
+        nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
         own_start = _point(starts[own_id])
         if self._reason == ReplanReason.EXHAUSTED:
             self._plan_alone(own_id, own_start, nodes)
@@ -241,6 +249,7 @@ class SearchPlanner:
             self._claims = np.asarray(sum(walks.values(), []), dtype=np.int64)
             self._group = frozenset(int(agent) for agent in starts)
         self._start = own_start
+        self._planned = values.copy()
         self._reason = ReplanReason.NONE
         return self._walk.tolist()
 
