@@ -342,19 +342,24 @@ def _number(group: str, key: str, value: Any) -> float:
             f"parameter '{group}.{key}' = {value!r}: must be a number") from None
 
 
+def read_yaml(path, error=ParameterError):
+    """Parse a YAML file; a syntax error becomes `error` naming the file and the position."""
+    import yaml
+
+    with open(path, encoding='utf-8') as stream:
+        try:
+            return yaml.safe_load(stream)
+        except yaml.YAMLError as problem:
+            raise error(f'{path}: not valid YAML: {problem}') from None
+
+
 def load_params_file(path) -> SatParams:
     """Read the SatParams groups of a ROS 2 parameter file's ``/**: ros__parameters:`` section.
 
     Keys of that section that are not SatParams groups (node-level settings) are ignored here;
     the node that owns them reads them.
     """
-    import yaml
-
-    with open(path, encoding='utf-8') as stream:
-        try:
-            document = yaml.safe_load(stream)
-        except yaml.YAMLError as error:
-            raise ParameterError(f'{path}: not valid YAML: {error}') from None
+    document = read_yaml(path, ParameterError)
     try:
         section = document['/**']['ros__parameters']
     except (TypeError, KeyError):

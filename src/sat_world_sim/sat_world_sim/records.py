@@ -105,7 +105,11 @@ class RunCollector:
         elif kind == 'status':
             self.statuses[(agent, int(msg.step))] = msg
         elif kind == 'density':
-            self.densities[agent] = msg     # only the last one is shown (final density plot)
+            self.keep_density(agent, int(msg.step), msg)
+
+    def keep_density(self, agent: int, step: int, msg) -> None:
+        """Store a search density; the metrics only need each agent's last (the final plot)."""
+        self.densities[agent] = msg
 
     def complete(self) -> bool:
         """Whether the run finished and its last step's truth, traffic and statuses are in."""

@@ -69,7 +69,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.records import MODE_NAMES, route, step_record
+from sat_world_sim.records import MODE_NAMES, RunCollector, step_record
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
@@ -329,36 +329,26 @@ class SwarmLogger:
         self.rec.log('status', rr.TextDocument('\n'.join(lines), media_type='text/markdown'))
 
 
-class StepBuffer:
+class StepBuffer(RunCollector):
     """Groups the graph's messages by step and logs each step, in order, once it is in.
 
-    Fed like records.RunCollector (``add(topic, msg)`` with the graph's topic names), by the live
-    logger node and by an offline replay of a bag alike. A step is logged once its truth, radio
-    traffic and the status and density of each of its active agents are in, or once a later
-    step is (what is still missing then is left out); ``log_rest`` logs everything left.
+    A records.RunCollector (``add(topic, msg)`` with the graph's topic names) that keeps every
+    step's density, fed by the live logger node and by an offline replay of a bag alike. A step
+    is logged once its truth, radio traffic and the status and density of each of its active
+    agents are in, or once a later step is (what is still missing then is left out);
+    ``log_rest`` logs everything left.
     """
 
     def __init__(self, view: SwarmLogger):
+        super().__init__(view.agent_ids)
         self.view = view
-        self.agent_ids = view.agent_ids
-        self.truths, self.traffic, self.statuses, self.densities = {}, {}, {}, {}
         self.next_step = 1
-        self.final = None   # the world's last WorldStep (finished = True)
 
-    def add(self, topic: str, msg) -> None:
-        """Take one message of the graph; topics it does not use are ignored."""
-        kind, agent = route(topic, self.agent_ids) or (None, None)
-        if kind == 'step' and msg.finished:
-            self.final = msg
-        elif kind == 'truth':
-            self.truths[int(msg.step)] = msg
-        elif kind == 'radio':
-            self.traffic[int(msg.step)] = msg
-        elif kind in ('status', 'density'):
-            store = self.statuses if kind == 'status' else self.densities
-            store[(agent, int(msg.step))] = msg
+    def keep_density(self, agent: int, step: int, msg) -> None:
+        """Store every step's density until that step is logged."""
+        self.densities[(agent, step)] = msg
 
-    def complete(self, step: int) -> bool:
+    def step_complete(self, step: int) -> bool:
         """Whether step's truth, traffic and its active agents' statuses and densities are in."""
         truth = self.truths.get(step)
         if truth is None or step not in self.traffic:
@@ -370,8 +360,9 @@ class StepBuffer:
         """Log every step that is ready, in order; return how many were logged."""
         logged = 0
         while True:
-            later_complete = any(self.complete(s) for s in self.truths if s > self.next_step)
-            if self.next_step in self.truths and (self.complete(self.next_step)
+            later_complete = any(self.step_complete(s) for s in self.truths
+                                 if s > self.next_step)
+            if self.next_step in self.truths and (self.step_complete(self.next_step)
                                                   or later_complete):
                 self._log(self.next_step)
                 logged += 1

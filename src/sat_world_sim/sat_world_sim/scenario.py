@@ -28,6 +28,8 @@ from typing import Any, Mapping, Optional, Tuple
 
 import numpy as np
 
+from sat_agent.config import read_yaml
+
 
 class ScenarioError(ValueError):
     """A scenario file or mapping with an unknown key or a value outside what is allowed."""
@@ -126,13 +128,7 @@ def scenario_from_mapping(document: Any, area_width: float = 100.0,
 
 def load_scenario(path, area_width: float = 100.0, area_height: float = 100.0) -> Scenario:
     """Read and validate a scenario YAML file."""
-    import yaml
-
-    with open(path, encoding='utf-8') as stream:
-        try:
-            document = yaml.safe_load(stream)
-        except yaml.YAMLError as error:
-            raise ScenarioError(f'{path}: not valid YAML: {error}') from None
+    document = read_yaml(path, ScenarioError)
     try:
         return scenario_from_mapping(document, area_width, area_height)
     except ScenarioError as error:
