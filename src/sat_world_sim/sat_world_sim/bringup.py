@@ -114,7 +114,7 @@ def ros_env(domain_id: Optional[int]) -> dict:
     return env
 
 
-def build_children(args, agent_ids) -> List[Child]:
+def build_children(args, agent_ids, scenario_seed: int) -> List[Child]:
     """Return the processes of one run (module docstring)."""
     params = ['--params-file', str(Path(args.params).resolve())]
     ids = '[' + ','.join(str(i) for i in agent_ids) + ']'
@@ -138,7 +138,8 @@ def build_children(args, agent_ids) -> List[Child]:
     if args.steps is not None:
         world += ['-p', f'steps:={args.steps}']
     children = [Child('world_sim', world), *observers]
-    seed = ['-p', f'seed:={args.seed if args.seed is not None else 0}']
+    # Agents draw from the run's seed, as in the in-process swarm (inprocess_swarm.py).
+    seed = ['-p', f'seed:={args.seed if args.seed is not None else scenario_seed}']
     if args.composed:
         children.append(Child('agents', [executable('sat_agent', 'agents_composed'), '--ids',
                                          *map(str, agent_ids), '--ros-args', *params, *seed],
@@ -217,7 +218,7 @@ def main(argv=None) -> int:
     try:
         params = load_params_file(args.params)
         scenario = load_scenario(args.scenario, params.area.width, params.area.height)
-        children = build_children(args, scenario.agent_ids)
+        children = build_children(args, scenario.agent_ids, scenario.seed)
     except (ParameterError, ScenarioError, OSError) as error:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
