@@ -40,6 +40,7 @@ import urllib.request
 from rerun.blueprint.components import AbsoluteTimeRange
 from rerun.chunk import RrdReader
 
+from sat_world_sim.bringup import stop_group
 from sat_world_sim.rerun_view import default_blueprint, private_rerun_env, rerun_command
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -88,20 +89,6 @@ def find_chromium(install: bool) -> str:
     raise SystemExit('screenshot_viewer: chromium not found. Install it with '
                      '`apt-get update && apt-get install -y chromium` (Debian), or pass '
                      '--install-chromium.')
-
-
-def stop(process: subprocess.Popen, grace: float = 5.0):
-    """SIGTERM the process group of process, SIGKILL after grace seconds, reap it."""
-    if process.poll() is not None:
-        return
-    try:
-        os.killpg(process.pid, signal.SIGTERM)
-        process.wait(timeout=grace)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.wait()
-    except ProcessLookupError:
-        pass
 
 
 def wait_http(url: str, timeout: float, process: subprocess.Popen):
@@ -194,7 +181,7 @@ def screenshot(chromium: str, url: str, out: Path, size, wait: float, profile: P
     finally:
         os.close(to_write)
         os.close(from_read)
-        stop(process)
+        stop_group(process, signal.SIGTERM)
 
 
 def main(argv=None) -> int:
@@ -248,7 +235,7 @@ def main(argv=None) -> int:
             print(f'screenshot_viewer: {url}', flush=True)
             screenshot(chromium, url, args.out, size, args.wait, tmp / 'chromium-profile', env)
         finally:
-            stop(server)
+            stop_group(server, signal.SIGTERM)
     print(f'screenshot_viewer: wrote {args.out} ({args.out.stat().st_size} bytes)')
     return 0
 

@@ -4,12 +4,13 @@ from contextlib import contextmanager
 import json
 import os
 from pathlib import Path
-import signal
 import subprocess
 import sys
 
 from ament_index_python.packages import get_package_prefix
 import yaml
+
+from sat_world_sim.bringup import stop_group
 
 REPO = Path(__file__).resolve().parents[1]
 PARAMS = REPO / 'config' / 'paper.yaml'
@@ -36,20 +37,7 @@ def started(command, log_path: Path):
         try:
             yield process
         finally:
-            stop(process)
-
-
-def stop(process: subprocess.Popen, grace: float = 10.0):
-    """SIGINT the process group, then SIGKILL after grace seconds; wait for the exit."""
-    if process.poll() is None:
-        try:
-            os.killpg(process.pid, signal.SIGINT)
-            process.wait(timeout=grace)
-        except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
-        except ProcessLookupError:
-            pass
+            stop_group(process, grace=10.0)
 
 
 def run_swarm(run_dir: Path, scenario: Path, *extra, timeout: float = 600.0):

@@ -78,15 +78,27 @@ class Child:
         return self.process.poll()
 
     def stop(self):
-        """SIGINT, then SIGKILL after STOP_GRACE_S; waits for the exit."""
-        if self.process is None or self.process.poll() is not None:
-            return
-        self.process.send_signal(signal.SIGINT)
-        try:
-            self.process.wait(timeout=STOP_GRACE_S)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
-            self.process.wait()
+        """Stop the process (and anything it started): SIGINT, SIGKILL after STOP_GRACE_S."""
+        if self.process is not None:
+            stop_group(self.process)
+
+
+def stop_group(process: subprocess.Popen, first=signal.SIGINT, grace: float = STOP_GRACE_S):
+    """Stop the process group of a process started with start_new_session=True.
+
+    Sends first, then SIGKILL after grace seconds, and reaps the process: nothing is left
+    running. A process that already ended is fine.
+    """
+    if process.poll() is not None:
+        return
+    try:
+        os.killpg(process.pid, first)
+        process.wait(timeout=grace)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+    except ProcessLookupError:
+        process.wait()
 
 
 def _prefix_lines(name: str, stream, log, echo: bool):
