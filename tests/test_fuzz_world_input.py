@@ -112,7 +112,7 @@ def world(tmp_path_factory):
                                       {'id': 2, 'start': [30.0, 50.0]}])
     command = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
                str(PARAMS), '-p', f'scenario:={scenario}', '-p', 'observers:=0',
-               '-p', 'diagnostics_period:=0.1', '-p', 'agent_timeout:=30.0']
+               '-p', 'diagnostics_period:=0.1', '-p', 'agent_timeout:=120.0']
     rclpy.init()
     node = rclpy.create_node('world_fuzzer')
     agents = ScriptedAgents(node)
@@ -125,7 +125,7 @@ def world(tmp_path_factory):
     rclpy.try_shutdown()
 
 
-def spin_until(node, done, timeout=30.0):
+def spin_until(node, done, timeout=90.0):
     deadline = time.monotonic() + timeout
     while not done() and time.monotonic() < deadline:
         rclpy.spin_once(node, timeout_sec=0.02)
@@ -165,7 +165,7 @@ def test_world_sim_survives_and_counts_every_invalid_message(world, batch):
     spin_until(world.node, lambda: (
         {k_: n for k_, n in counted().items() if k_ != 'duplicate'} == expected
         and world.counters.get('dropped.stale_step', 0) +
-        world.counters.get('dropped.duplicate', 0) == together), timeout=20.0)
+        world.counters.get('dropped.duplicate', 0) == together), timeout=60.0)
     assert world.process.poll() is None, 'world_sim died'
     assert {key: n for key, n in counted().items() if key != 'duplicate'} == expected
     assert world.counters.get('dropped.stale_step', 0) + world.counters.get(
