@@ -8,10 +8,10 @@ import time
 
 import pytest
 import rclpy
-from ros_harness import executable, PARAMS, REPO, run_swarm
+from ros_harness import executable, PARAMS, REPO, run_swarm, started
 
-from sat_agent.qos import WORLD
-from sat_msgs.msg import WorldStep
+from sat_agent.qos import STEP, WORLD
+from sat_msgs.msg import ControlCommand, WorldStep
 
 pytestmark = pytest.mark.ros
 STEPS = 120
@@ -83,3 +83,43 @@ def test_heavy_loss_and_latency_keep_the_swarm_working(tmp_path):
     for name in ('agent_1', 'agent_2'):
         log = (run_dir / 'logs' / f'{name}.log').read_text()
         assert 'Traceback' not in log and 'stale_step' not in log, log[-2000:]
+
+
+@pytest.mark.timeout(300)
+def test_agents_hold_then_exit_cleanly_when_world_sim_dies(tmp_path):
+    world_timeout = 4.0
+    world = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
+             str(PARAMS), '-p', f"scenario:={REPO / 'config' / 'scenarios' / 'paper.yaml'}",
+             '-p', 'observers:=0']
+    agent = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
+             '--params-file', str(PARAMS), '-p', 'agent_id:=1',
+             '-p', f'world_timeout:={world_timeout}']
+    other = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_2',
+             '--params-file', str(PARAMS), '-p', 'agent_id:=2']
+    rclpy.init()
+    node = rclpy.create_node('world_killer')
+    commands = []
+    node.create_subscription(ControlCommand, '/agent_1/cmd',
+                             lambda m: commands.append((time.monotonic(), m.step)), STEP)
+    try:
+        with started(agent, tmp_path / 'agent_1.log') as a1, \
+                started(other, tmp_path / 'agent_2.log'), \
+                started(world, tmp_path / 'world.log') as w:
+            deadline = time.monotonic() + 120
+            while (not commands or commands[-1][1] < 10) and time.monotonic() < deadline:
+                rclpy.spin_once(node, timeout_sec=0.05)
+            assert commands, 'the run never started'
+            os.killpg(w.pid, signal.SIGKILL)
+            w.wait()
+            killed = time.monotonic()
+            while a1.poll() is None and time.monotonic() - killed < world_timeout + 20:
+                rclpy.spin_once(node, timeout_sec=0.05)
+            gone = time.monotonic() - killed
+            assert a1.returncode == 0, (tmp_path / 'agent_1.log').read_text()[-2000:]
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+    assert world_timeout <= gone <= world_timeout + 10
+    # It held: no command after the world died (at most the one of the step in flight).
+    assert len([t for t, _ in commands if t > killed + 0.5]) == 0
+    assert 'world_sim is gone, exiting' in (tmp_path / 'agent_1.log').read_text()
