@@ -22,7 +22,6 @@ Every sink also writes run.rrd. Rerun analytics are off: this process and the vi
 use a private Rerun config under ``<run_dir>/.rerun`` (rerun_view.private_rerun_env).
 """
 
-from pathlib import Path
 import subprocess
 import sys
 import time
@@ -32,12 +31,10 @@ from rclpy.node import Node
 import rerun as rr
 
 from sat_agent.node_runner import run_nodes, RunFinished
-from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
-from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
 from sat_world_sim import rerun_view
-from sat_world_sim.observer import ReadyAnnouncer
+from sat_world_sim.observer import declare_run, watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
@@ -50,10 +47,7 @@ class LoggerNode(Node):
     def __init__(self, **kwargs):
         super().__init__('logger', **kwargs)
         self.params = declare_sat_params(self)
-        run_dir = self.declare_parameter('run_dir', '').value
-        if not run_dir:
-            raise ValueError("parameter 'run_dir' is required: the directory to write run.rrd in")
-        self.agent_ids = [int(i) for i in self.declare_parameter('agent_ids', [1, 2]).value]
+        self.run_dir, self.agent_ids = declare_run(self, 'the directory to write run.rrd in')
         sink = self.declare_parameter('sink', 'file').value
         if sink not in SINKS:
             raise ValueError(f"parameter 'sink' = {sink!r}: must be one of {', '.join(SINKS)}")
@@ -63,7 +57,6 @@ class LoggerNode(Node):
             if not isinstance(value, int) or not 1 <= value <= 65535:
                 raise ValueError(f"parameter '{name}' = {value!r}: must be a port in 1..65535")
             ports[name] = value
-        self.run_dir = Path(run_dir)
         self.run_dir.mkdir(parents=True, exist_ok=True)
         self.rrd_path = self.run_dir / 'run.rrd'
         env = rerun_view.disable_analytics(self.run_dir / '.rerun')
@@ -81,17 +74,8 @@ class LoggerNode(Node):
             square_side=self.params.sensor.square_side)
         self.buffer = rerun_view.StepBuffer(self.view)
         self._finished_at = None
-        topics = [('/world/step', WorldStep, WORLD), ('/world/truth', GroundTruth, WORLD),
-                  ('/world/radio', RadioTraffic, WORLD)]
-        for i in self.agent_ids:
-            topics += [(f'/agent_{i}/status', AgentStatus, STEP),
-                       (f'/agent_{i}/radio/out/search_density', SearchDensity, RADIO)]
-        subscriptions = [
-            self.create_subscription(cls, topic,
-                                     lambda msg, topic=topic: self.buffer.add(topic, msg), qos)
-            for topic, cls, qos in topics]
         # world_sim starts step 1 once every subscription here has matched its publisher.
-        self.ready = ReadyAnnouncer(self, subscriptions)
+        self.ready = watch_run(self, self.agent_ids, self.buffer.add)
         self.create_timer(0.1, self._tick)
         self.get_logger().info(f'logging to {self.rrd_path} (sink {sink})')
 

@@ -6,17 +6,14 @@ offline replay of a bag uses) and, once the world's ``finished`` step and the la
 are in, writes ``<run_dir>/metrics.json`` and ``<run_dir>/plots/*.png`` and exits.
 """
 
-from pathlib import Path
 import time
 
 from rclpy.node import Node
 
 from sat_agent.node_runner import run_nodes, RunFinished
-from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
-from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
-from sat_world_sim.observer import ReadyAnnouncer
+from sat_world_sim.observer import declare_run, watch_run
 from sat_world_sim.records import RunCollector
 
 # After the world says "finished", wait at most this long for the last statuses.
@@ -29,23 +26,10 @@ class MetricsNode(Node):
     def __init__(self, **kwargs):
         super().__init__('metrics', **kwargs)
         self.params = declare_sat_params(self)
-        run_dir = self.declare_parameter('run_dir', '').value
-        if not run_dir:
-            raise ValueError("parameter 'run_dir' is required: the directory to write into")
-        self.run_dir = Path(run_dir)
-        agent_ids = list(self.declare_parameter('agent_ids', [1, 2]).value)
+        self.run_dir, agent_ids = declare_run(self, 'where metrics.json and plots/ go')
         self.collector = RunCollector(agent_ids)
         self._finished_at = None
-        topics = [('/world/step', WorldStep, WORLD), ('/world/truth', GroundTruth, WORLD),
-                  ('/world/radio', RadioTraffic, WORLD)]
-        for i in agent_ids:
-            topics += [(f'/agent_{i}/status', AgentStatus, STEP),
-                       (f'/agent_{i}/radio/out/search_density', SearchDensity, RADIO)]
-        subscriptions = [
-            self.create_subscription(cls, topic,
-                                     lambda msg, topic=topic: self.collector.add(topic, msg), qos)
-            for topic, cls, qos in topics]
-        self.ready = ReadyAnnouncer(self, subscriptions)
+        self.ready = watch_run(self, agent_ids, self.collector.add)
         self.create_timer(0.1, self._tick)
 
     def _tick(self):

@@ -7,7 +7,6 @@ install (with sat_msgs built) plays it back. Timestamps are the receive times (n
 The node closes the bag and exits after the world's final step, or on Ctrl-C.
 """
 
-from pathlib import Path
 import time
 
 from rclpy.node import Node
@@ -20,7 +19,7 @@ from sat_agent.node_runner import run_nodes, RunFinished
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.observer import ReadyAnnouncer
+from sat_world_sim.observer import declare_run, ReadyAnnouncer
 from sat_world_sim.replay_support import message_class, topic_qos
 from sat_world_sim.topics import graph_topics
 
@@ -43,13 +42,10 @@ class RecorderNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('recorder', **kwargs)
-        run_dir = self.declare_parameter('run_dir', '').value
-        if not run_dir:
-            raise ValueError("parameter 'run_dir' is required: the bag goes to <run_dir>/bag")
-        agent_ids = list(self.declare_parameter('agent_ids', [1, 2]).value)
-        self.path = Path(run_dir) / 'bag'
+        run_dir, agent_ids = declare_run(self, 'the bag goes to <run_dir>/bag')
+        self.path = run_dir / 'bag'
         if self.path.exists():
-            raise ValueError(f"parameter 'run_dir' = {run_dir!r}: {self.path} exists already")
+            raise ValueError(f"parameter 'run_dir' = '{run_dir}': {self.path} exists already")
         self.path.parent.mkdir(parents=True, exist_ok=True)
         store = sat_typestore()
         self.writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
