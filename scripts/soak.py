@@ -2,16 +2,26 @@
 """Soak test: a long lock-step run of the ROS graph, watching memory and output growth.
 
 Runs ``--steps`` (default 5,000) steps of ``--agents`` (default 4) agents with random target
-births through the bring-up (separate processes, recorder on), samples every process's resident
-memory (VmRSS) and the bag's size while it runs, and prints per process the RSS after warm-up
-and at the end (growth must stay under 10 %) and the bag's growth per 1,000 steps (it should be
-linear in steps). Not part of `make test`: it takes many minutes.
+births through the bring-up (separate processes; metrics, recorder and logger on), follows the
+world's clock on ``/world/step`` and, every ``--sample-every`` steps, samples every process's
+resident memory (VmRSS) and the sizes of the bag and of run.rrd. It prints:
+
+- per process: RSS after warm-up (the first sample at ``--warm-up`` of the steps), at the last
+  step, the maximum and the growth from warm-up to the end;
+- the bag's and run.rrd's size at every 1,000 steps and the increments (linear in steps when the
+  increments are equal), and their final sizes per 1,000 steps;
+- the wall time, whether any process of the run is still alive after the bring-up returned, and
+  a PASS/FAIL line: every process grew by less than ``--max-growth`` % (10) after warm-up and
+  nothing was left running (exit code 0 only then).
+
+Not part of `make test`: 5,000 steps take tens of minutes.
 
     scripts/with_env.sh python scripts/soak.py [--steps 5000] [--agents 4] [--json]
 """
 
 import argparse
 import json
+import os
 from pathlib import Path
 import subprocess
 import sys
@@ -21,10 +31,10 @@ import time
 import numpy as np
 import yaml
 
-from sat_world_sim.bringup import executable
+from sat_world_sim.bringup import executable, private_domain_id, ros_env
 
 ROOT = Path(__file__).resolve().parents[1]
-SAMPLE_S = 5.0
+SIZE_EVERY = 1000
 
 
 def rss_kib(pid: int):
@@ -36,6 +46,15 @@ def rss_kib(pid: int):
     except OSError:
         return None
     return None
+
+
+def alive(pid: int) -> bool:
+    """Whether a process exists and is not a zombie."""
+    try:
+        state = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state != 'Z'
 
 
 def children(pid: int) -> dict:
@@ -56,8 +75,118 @@ def children(pid: int) -> dict:
     return named
 
 
-def bag_bytes(run_dir: Path) -> int:
-    return sum(p.stat().st_size for p in (run_dir / 'bag').glob('*') if p.is_file())
+def output_bytes(run_dir: Path) -> dict:
+    """Current sizes of the bag (every file in bag/) and of run.rrd, in bytes."""
+    bag = run_dir / 'bag'
+    rrd = run_dir / 'run.rrd'
+    return {'bag': sum(p.stat().st_size for p in bag.glob('*') if p.is_file())
+            if bag.is_dir() else 0,
+            'rrd': rrd.stat().st_size if rrd.is_file() else 0}
+
+
+def write_scenario(path: Path, steps: int, agents: int):
+    """A square area, agents at random starts, targets born at random (seed 3)."""
+    rng = np.random.default_rng(3)
+    path.write_text(yaml.safe_dump({
+        'name': 'soak', 'seed': 3, 'steps': steps, 'truth_process_noise': 1e-3,
+        'agents': [{'id': i + 1, 'start': [float(x), float(y)]}
+                   for i, (x, y) in enumerate(rng.uniform(5, 95, (agents, 2)))],
+        'random_births': {'rate': 0.02, 'survival': 0.995, 'speed_std': 0.5}}))
+
+
+class Watcher:
+    """Follows /world/step from its own node and samples the run's processes and files."""
+
+    def __init__(self, swarm: subprocess.Popen, run_dir: Path, sample_every: int):
+        import rclpy
+        from sat_agent.qos import WORLD
+        from sat_msgs.msg import WorldStep
+
+        self.rclpy = rclpy
+        self.swarm, self.run_dir, self.sample_every = swarm, run_dir, sample_every
+        self.step = 0
+        self.rss = {}        # name -> [(step, KiB)]
+        self.sizes = []      # [(step, {'bag': bytes, 'rrd': bytes})] every SIZE_EVERY steps
+        self.pids = set()
+        rclpy.init()
+        self.node = rclpy.create_node('soak_watcher')
+        self.node.create_subscription(WorldStep, '/world/step', self._on_step, WORLD)
+
+    def _on_step(self, msg):
+        self.step = max(self.step, int(msg.step))
+
+    def run(self):
+        """Spin until the bring-up exits, sampling every sample_every steps."""
+        next_sample = self.sample_every
+        try:
+            while self.swarm.poll() is None:
+                self.rclpy.spin_once(self.node, timeout_sec=0.5)
+                if self.step < next_sample:
+                    continue
+                step = self.step
+                for pid, name in children(self.swarm.pid).items():
+                    self.pids.add(pid)
+                    size = rss_kib(pid)
+                    if size is not None:
+                        self.rss.setdefault(name, []).append((step, size))
+                if step // SIZE_EVERY > len(self.sizes):
+                    self.sizes.append((step, output_bytes(self.run_dir)))
+                next_sample = step - step % self.sample_every + self.sample_every
+        finally:
+            self.node.destroy_node()
+            self.rclpy.try_shutdown()
+
+
+def rss_figures(rss: dict, warm_up_step: float) -> dict:
+    figures = {}
+    for name, samples in sorted(rss.items()):
+        reference = next(((s, v) for s, v in samples if s >= warm_up_step), samples[-1])
+        end = samples[-1]
+        figures[name] = {'warm_up_step': reference[0], 'after_warm_up_kib': reference[1],
+                         'end_step': end[0], 'end_kib': end[1],
+                         'max_kib': max(v for _, v in samples),
+                         'growth_pct': round((end[1] - reference[1]) / reference[1] * 100, 1)}
+    return figures
+
+
+def size_figures(sizes: list, final: dict, steps: int) -> dict:
+    rows, previous = [], {'bag': 0, 'rrd': 0}
+    for step, size in sizes:
+        rows.append({'step': step, **size,
+                     'bag_increment': size['bag'] - previous['bag'],
+                     'rrd_increment': size['rrd'] - previous['rrd']})
+        previous = size
+    per_thousand = {f'{k}_bytes_per_1000_steps': round(v / max(steps, 1) * 1000)
+                    for k, v in final.items()}
+    return {'at': rows, 'final': final, **per_thousand}
+
+
+def report(figures: dict, max_growth: float) -> bool:
+    """Print the figures; return whether the soak passed."""
+    for name, f in figures['rss'].items():
+        print(f"{name:12s} RSS after warm-up (step {f['warm_up_step']}) "
+              f"{f['after_warm_up_kib'] / 1024:7.1f} MiB, end (step {f['end_step']}) "
+              f"{f['end_kib'] / 1024:7.1f} MiB, max {f['max_kib'] / 1024:7.1f} MiB, "
+              f"growth {f['growth_pct']:+.1f} %")
+    print('   step   bag MB  (+per 1k)   rrd MB  (+per 1k)')
+    for row in figures['sizes']['at']:
+        print(f"{row['step']:7d} {row['bag'] / 1e6:8.1f} {row['bag_increment'] / 1e6:+9.1f} "
+              f"{row['rrd'] / 1e6:9.1f} {row['rrd_increment'] / 1e6:+9.1f}")
+    sizes = figures['sizes']
+    print(f"final: bag {sizes['final']['bag'] / 1e6:.1f} MB "
+          f"({sizes['bag_bytes_per_1000_steps'] / 1e6:.1f} MB per 1,000 steps), run.rrd "
+          f"{sizes['final']['rrd'] / 1e6:.1f} MB "
+          f"({sizes['rrd_bytes_per_1000_steps'] / 1e6:.1f} MB per 1,000 steps)")
+    print(f"{figures['steps']} steps, {figures['agents']} agents in {figures['wall_s']:.0f} s, "
+          f"bring-up exit code {figures['exit_code']}")
+    grown = [n for n, f in figures['rss'].items() if f['growth_pct'] >= max_growth]
+    left = figures['left_running']
+    print(f"left running after the bring-up returned: {', '.join(map(str, left)) or 'nothing'}")
+    passed = not grown and not left and figures['exit_code'] == 0 and bool(figures['rss'])
+    print(f"{'PASS' if passed else 'FAIL'}: RSS growth after warm-up < {max_growth:g} % for "
+          f"every process{'' if not grown else ' except ' + ', '.join(grown)}; "
+          f"{'no' if not left else len(left)} process(es) left running")
+    return passed
 
 
 def main() -> int:
@@ -65,62 +194,47 @@ def main() -> int:
     parser.add_argument('--steps', type=int, default=5000)
     parser.add_argument('--agents', type=int, default=4)
     parser.add_argument('--warm-up', type=float, default=0.1,
-                        help='share of the samples before the reference RSS is taken')
+                        help='share of the steps after which the reference RSS is taken')
+    parser.add_argument('--sample-every', type=int, default=50, help='steps between samples')
+    parser.add_argument('--max-growth', type=float, default=10.0,
+                        help='allowed RSS growth after warm-up (%%)')
+    parser.add_argument('--run-dir', type=Path, default=None,
+                        help='keep the run here (default: a temporary directory, removed)')
     parser.add_argument('--json', action='store_true', help='last line: JSON of the figures')
     args = parser.parse_args()
+    if args.run_dir is not None and args.run_dir.exists():
+        parser.error(f'--run-dir {args.run_dir} exists already')
+    # The watcher joins the run's private domain, localhost only, like the bring-up's children.
+    domain = private_domain_id()
+    os.environ.update(ros_env(domain))
     with tempfile.TemporaryDirectory(prefix='sat_soak_') as tmp:
         tmp = Path(tmp)
-        rng = np.random.default_rng(3)
         scenario = tmp / 'soak.yaml'
-        scenario.write_text(yaml.safe_dump({
-            'name': 'soak', 'seed': 3, 'steps': args.steps, 'truth_process_noise': 1e-3,
-            'agents': [{'id': i + 1, 'start': [float(x), float(y)]}
-                       for i, (x, y) in enumerate(rng.uniform(5, 95, (args.agents, 2)))],
-            'random_births': {'rate': 0.02, 'survival': 0.995, 'speed_std': 0.5}}))
-        run_dir = tmp / 'run'
+        write_scenario(scenario, args.steps, args.agents)
+        run_dir = args.run_dir or tmp / 'run'
+        started = time.monotonic()
         swarm = subprocess.Popen(
             [executable('sat_world_sim', 'swarm'), '--scenario', str(scenario),
              '--params', str(ROOT / 'config' / 'paper.yaml'), '--run-dir', str(run_dir),
-             '--quiet', '--timeout', str(args.steps * 2 + 600)],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        samples, bag = {}, []
-        started = time.monotonic()
-        while swarm.poll() is None:
-            time.sleep(SAMPLE_S)
-            for pid, name in children(swarm.pid).items():
-                size = rss_kib(pid)
-                if size is not None:
-                    samples.setdefault(name, []).append(size)
-            if (run_dir / 'bag').is_dir():
-                bag.append((time.monotonic() - started, bag_bytes(run_dir)))
+             '--domain-id', str(domain), '--quiet', '--timeout', str(args.steps * 2 + 600)],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        watcher = Watcher(swarm, run_dir, args.sample_every)
+        try:
+            watcher.run()
+        finally:
+            swarm.wait()
         wall = time.monotonic() - started
         metrics_path = run_dir / 'metrics.json'
         steps = len(json.loads(metrics_path.read_text())['steps']) if metrics_path.is_file() else 0
-        final_bag = bag_bytes(run_dir) if (run_dir / 'bag').is_dir() else 0
-    figures = {'steps': steps, 'agents': args.agents, 'wall_s': round(wall, 1),
-               'exit_code': swarm.returncode, 'bag_bytes': final_bag,
-               'bag_bytes_per_1000_steps': round(final_bag / max(steps, 1) * 1000),
-               'rss_kib': {}}
-    for name, values in sorted(samples.items()):
-        reference = values[min(len(values) - 1, int(len(values) * args.warm_up))]
-        growth = (values[-1] - reference) / reference * 100
-        figures['rss_kib'][name] = {'after_warm_up': reference, 'end': values[-1],
-                                    'max': max(values), 'growth_pct': round(growth, 1)}
-        print(f'{name:12s} RSS after warm-up {reference / 1024:7.1f} MiB, end '
-              f'{values[-1] / 1024:7.1f} MiB, growth {growth:+.1f} %')
-    if len(bag) >= 4:
-        half = len(bag) // 2
-        rates = [(b1 - b0) / (t1 - t0) for (t0, b0), (t1, b1) in
-                 ((bag[1], bag[half]), (bag[half], bag[-1]))]
-        figures['bag_rate_first_half_Bps'], figures['bag_rate_second_half_Bps'] = map(round, rates)
-        print(f'bag growth {rates[0] / 1e6:.2f} MB/s in the first half, '
-              f'{rates[1] / 1e6:.2f} MB/s in the second (linear when equal)')
-    per_thousand = figures['bag_bytes_per_1000_steps'] / 1e6
-    print(f'{steps} steps, {args.agents} agents in {wall:.0f} s, exit {swarm.returncode}, bag '
-          f'{final_bag / 1e6:.1f} MB ({per_thousand:.1f} MB per 1,000 steps)')
+        figures = {'steps': steps, 'agents': args.agents, 'wall_s': round(wall, 1),
+                   'exit_code': swarm.returncode,
+                   'rss': rss_figures(watcher.rss, args.warm_up * args.steps),
+                   'sizes': size_figures(watcher.sizes, output_bytes(run_dir), steps),
+                   'left_running': sorted(p for p in watcher.pids if alive(p))}
+    passed = report(figures, args.max_growth)
     if args.json:
         print(json.dumps(figures))
-    return 0 if swarm.returncode == 0 else 1
+    return 0 if passed else 1
 
 
 if __name__ == '__main__':

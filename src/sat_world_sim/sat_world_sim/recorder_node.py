@@ -4,6 +4,8 @@
 CDR bytes that crossed DDS (subscriptions are raw, nothing is re-serialised), with the message
 definitions of sat_msgs and the publishers' QoS profiles, so ``ros2 bag play`` on a full Jazzy
 install (with sat_msgs built) plays it back. Timestamps are the receive times (ns since epoch).
+The MCAP chunks are zstd-compressed (rosbag2's MCAP storage reads them natively; metadata.yaml
+says no bag-level compression): the search densities, most of the bytes, shrink several-fold.
 The node closes the bag and exits after the world's final step, or on Ctrl-C.
 """
 
@@ -13,7 +15,7 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
                                 QosTime)
-from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
 from sat_agent.node_runner import run_nodes, RunFinished
 from sat_msgs.msg import WorldStep
@@ -49,6 +51,9 @@ class RecorderNode(Node):
         self.path.parent.mkdir(parents=True, exist_ok=True)
         store = sat_typestore()
         self.writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
+        # Chunk compression, not rosbag2's file or message modes: the bag stays one plain MCAP
+        # that any MCAP reader and `ros2 bag play` open without a decompression step.
+        self.writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
         self.writer.open()
         self.count = 0
         self._finished_at = None

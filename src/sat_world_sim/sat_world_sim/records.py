@@ -5,7 +5,9 @@ metrics node and the offline replay of a bag build their records with these same
 metrics computed either way are equal.
 """
 
+from dataclasses import replace
 from pathlib import Path
+import pickle
 from typing import List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -15,6 +17,11 @@ from sat_world_sim.plots import write_plots
 from sat_world_sim.topics import agent_of
 
 MODE_NAMES = {0: 'SEARCH', 1: 'TRACK'}
+# A step's record is made once the world's truth is this many steps further on. In lock-step
+# the world waited for every active agent's answer before moving on, so by then everything of
+# that step has arrived; in real time a status this many periods late is left out. The live
+# metrics node and the offline replay of a bag apply the same rule, so they agree.
+SETTLE_STEPS = 20
 
 
 def _xy(points) -> np.ndarray:
@@ -81,11 +88,12 @@ def route(topic: str, agent_ids) -> Optional[Tuple[str, Optional[int]]]:
     return (kind, owner[0]) if kind else None
 
 
-class RunCollector:
-    """Gathers one run's messages by topic and turns them into metrics.json and plots.
+class StepMessages:
+    """The messages of one run that metrics and views read, grouped by kind and step.
 
-    Fed by the live metrics node and by the offline replay of a bag alike (``add(topic, msg)``
-    with the graph's topic names), so both compute metrics with the same code.
+    ``add(topic, msg)`` takes the graph's topic names (records.route), from the live graph or a
+    bag alike. Subclasses decide which search densities to keep (``keep_density``) and when a
+    step's messages can go.
     """
 
     def __init__(self, agent_ids):
@@ -108,8 +116,59 @@ class RunCollector:
             self.keep_density(agent, int(msg.step), msg)
 
     def keep_density(self, agent: int, step: int, msg) -> None:
+        """Store a search density (subclasses say which ones they need)."""
+        raise NotImplementedError
+
+
+class RunCollector(StepMessages):
+    """Turns one run's messages into metrics.json and plots, in memory bounded over the run.
+
+    Fed by the live metrics node and by the offline replay of a bag alike, so both compute
+    metrics with the same code. A step's messages are kept until the world is SETTLE_STEPS
+    further on; then the step becomes a compact StepRecord (no plans, no particles, no
+    densities) and its messages go. Only each agent's last search density is kept (the final
+    plot) and the last steps' plans (records()[-1].plans, the plot's last plans).
+    """
+
+    def __init__(self, agent_ids):
+        super().__init__(agent_ids)
+        # Settled records, pickled: about a quarter of the live objects' memory (~0.3 KB per
+        # agent and step), and whatever fields metrics.StepRecord has, they come back equal.
+        self.settled: List[bytes] = []
+        self.settled_up_to = 0   # steps up to this one are in self.settled
+
+    def add(self, topic: str, msg) -> None:
+        """Take one message of the graph; one of a step settled already is dropped."""
+        kind = (route(topic, self.agent_ids) or (None,))[0]
+        # The last settled step's traffic is still needed: the next record is a difference.
+        oldest = self.settled_up_to + (0 if kind == 'radio' else 1)
+        if kind in ('truth', 'radio', 'status') and int(msg.step) < oldest:
+            return
+        super().add(topic, msg)
+        if kind == 'truth':
+            self.settle(int(msg.step) - SETTLE_STEPS)
+
+    def keep_density(self, agent: int, step: int, msg) -> None:
         """Store a search density; the metrics only need each agent's last (the final plot)."""
         self.densities[agent] = msg
+
+    def settle(self, up_to: int) -> None:
+        """Turn every step up to up_to into a compact record and drop its messages."""
+        for step in sorted(s for s in self.truths if s <= up_to):
+            self.settled.append(pickle.dumps(replace(self.step_record(step), plans={})))
+        self.settled_up_to = max(self.settled_up_to, up_to)
+        for store, keep_from in ((self.truths, up_to + 1), (self.traffic, up_to)):
+            for step in [s for s in store if s < keep_from]:
+                del store[step]
+        for key in [k for k in self.statuses if k[1] <= up_to]:
+            del self.statuses[key]
+
+    def step_record(self, step: int) -> StepRecord:
+        """The StepRecord of a step whose truth is in, from the messages kept."""
+        return step_record(self.truths[step],
+                           {i: self.statuses[(i, step)] for i in self.agent_ids
+                            if (i, step) in self.statuses},
+                           self.traffic.get(step), self.traffic.get(step - 1))
 
     def complete(self) -> bool:
         """Whether the run finished and its last step's truth, traffic and statuses are in."""
@@ -123,12 +182,9 @@ class RunCollector:
                    if a.active and int(a.id) in self.agent_ids)
 
     def records(self) -> List[StepRecord]:
-        """One StepRecord per step that has ground truth."""
-        return [step_record(self.truths[step],
-                            {i: self.statuses[(i, step)] for i in self.agent_ids
-                             if (i, step) in self.statuses},
-                            self.traffic.get(step), self.traffic.get(step - 1))
-                for step in sorted(self.truths)]
+        """One StepRecord per step that has ground truth, in step order."""
+        return [pickle.loads(record) for record in self.settled] + \
+            [self.step_record(step) for step in sorted(self.truths)]
 
     def metrics(self, records: Sequence[StepRecord]) -> dict:
         """Return the metrics.json dict of the run."""

@@ -69,7 +69,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.records import MODE_NAMES, RunCollector, step_record
+from sat_world_sim.records import MODE_NAMES, step_record, StepMessages
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
@@ -329,10 +329,10 @@ class SwarmLogger:
         self.rec.log('status', rr.TextDocument('\n'.join(lines), media_type='text/markdown'))
 
 
-class StepBuffer(RunCollector):
+class StepBuffer(StepMessages):
     """Groups the graph's messages by step and logs each step, in order, once it is in.
 
-    A records.RunCollector (``add(topic, msg)`` with the graph's topic names) that keeps every
+    A records.StepMessages (``add(topic, msg)`` with the graph's topic names) that keeps every
     step's density, fed by the live logger node and by an offline replay of a bag alike. A step
     is logged once its truth, radio traffic and the status and density of each of its active
     agents are in, or once a later step is (what is still missing then is left out);
