@@ -6,8 +6,10 @@ births through the bring-up (separate processes; metrics, recorder and logger on
 world's clock on ``/world/step`` and, every ``--sample-every`` steps, samples every process's
 resident memory (VmRSS) and the sizes of the bag and of run.rrd. It prints:
 
-- per process: RSS after warm-up (the first sample at ``--warm-up`` of the steps), at the last
-  step, the maximum and the growth from warm-up to the end;
+- per process: RSS after warm-up and at the end, each the mean over a window of ``--window`` of
+  the steps (from ``--warm-up`` of the steps on, and up to the last step: the logger's chunk
+  batcher fills and empties in a saw-tooth of ~20 MB, so single samples would mislead), the
+  maximum and the growth from warm-up to the end;
 - the bag's and run.rrd's size at every 1,000 steps and the increments (linear in steps when the
   increments are equal), and their final sizes per 1,000 steps;
 - the wall time, whether any process of the run is still alive after the bring-up returned, and
@@ -76,7 +78,7 @@ def children(pid: int) -> dict:
 
 
 def output_bytes(run_dir: Path) -> dict:
-    """Current sizes of the bag (every file in bag/) and of run.rrd, in bytes."""
+    """Return the current sizes of the bag (every file in bag/) and of run.rrd, in bytes."""
     bag = run_dir / 'bag'
     rrd = run_dir / 'run.rrd'
     return {'bag': sum(p.stat().st_size for p in bag.glob('*') if p.is_file())
@@ -85,7 +87,7 @@ def output_bytes(run_dir: Path) -> dict:
 
 
 def write_scenario(path: Path, steps: int, agents: int):
-    """A square area, agents at random starts, targets born at random (seed 3)."""
+    """Write a scenario: agents at random starts, targets born at random (seed 3)."""
     rng = np.random.default_rng(3)
     path.write_text(yaml.safe_dump({
         'name': 'soak', 'seed': 3, 'steps': steps, 'truth_process_noise': 1e-3,
@@ -137,15 +139,16 @@ class Watcher:
             self.rclpy.try_shutdown()
 
 
-def rss_figures(rss: dict, warm_up_step: float) -> dict:
+def rss_figures(rss: dict, warm_up: int, window: int, last: int) -> dict:
+    """Mean RSS over [warm_up, warm_up + window) and (last - window, last] steps, growth, max."""
     figures = {}
     for name, samples in sorted(rss.items()):
-        reference = next(((s, v) for s, v in samples if s >= warm_up_step), samples[-1])
-        end = samples[-1]
-        figures[name] = {'warm_up_step': reference[0], 'after_warm_up_kib': reference[1],
-                         'end_step': end[0], 'end_kib': end[1],
+        early = [v for s, v in samples if warm_up <= s < warm_up + window] or [samples[-1][1]]
+        late = [v for s, v in samples if s > last - window] or [samples[-1][1]]
+        reference, end = float(np.mean(early)), float(np.mean(late))
+        figures[name] = {'after_warm_up_kib': round(reference), 'end_kib': round(end),
                          'max_kib': max(v for _, v in samples),
-                         'growth_pct': round((end[1] - reference[1]) / reference[1] * 100, 1)}
+                         'growth_pct': round((end - reference) / reference * 100, 1)}
     return figures
 
 
@@ -163,11 +166,19 @@ def size_figures(sizes: list, final: dict, steps: int) -> dict:
 
 def report(figures: dict, max_growth: float) -> bool:
     """Print the figures; return whether the soak passed."""
+    window = figures['rss_window']
+    print(f'RSS means over steps {window[0]}-{window[1]} (after warm-up) and '
+          f'{window[2]}-{window[3]} (end):')
     for name, f in figures['rss'].items():
-        print(f"{name:12s} RSS after warm-up (step {f['warm_up_step']}) "
-              f"{f['after_warm_up_kib'] / 1024:7.1f} MiB, end (step {f['end_step']}) "
+        print(f"{name:12s} after warm-up {f['after_warm_up_kib'] / 1024:7.1f} MiB, end "
               f"{f['end_kib'] / 1024:7.1f} MiB, max {f['max_kib'] / 1024:7.1f} MiB, "
               f"growth {f['growth_pct']:+.1f} %")
+    names = sorted(figures['rss'])
+    print('RSS (MiB) from the first sample at or after every 1,000 steps:')
+    print('   step ' + ' '.join(f'{n:>10s}' for n in names))
+    for mark in range(SIZE_EVERY, figures['steps'] + 1, SIZE_EVERY):
+        row = [next((v for s, v in figures['rss_samples'][n] if s >= mark), None) for n in names]
+        print(f'{mark:7d} ' + ' '.join(f'{v / 1024:10.1f}' if v else f'{"-":>10s}' for v in row))
     print('   step   bag MB  (+per 1k)   rrd MB  (+per 1k)')
     for row in figures['sizes']['at']:
         print(f"{row['step']:7d} {row['bag'] / 1e6:8.1f} {row['bag_increment'] / 1e6:+9.1f} "
@@ -195,6 +206,8 @@ def main() -> int:
     parser.add_argument('--agents', type=int, default=4)
     parser.add_argument('--warm-up', type=float, default=0.1,
                         help='share of the steps after which the reference RSS is taken')
+    parser.add_argument('--window', type=float, default=0.1,
+                        help='share of the steps the reference and end RSS are averaged over')
     parser.add_argument('--sample-every', type=int, default=50, help='steps between samples')
     parser.add_argument('--max-growth', type=float, default=10.0,
                         help='allowed RSS growth after warm-up (%%)')
@@ -207,6 +220,7 @@ def main() -> int:
     # The watcher joins the run's private domain, localhost only, like the bring-up's children.
     domain = private_domain_id()
     os.environ.update(ros_env(domain))
+    warm_up, window = round(args.warm_up * args.steps), max(1, round(args.window * args.steps))
     with tempfile.TemporaryDirectory(prefix='sat_soak_') as tmp:
         tmp = Path(tmp)
         scenario = tmp / 'soak.yaml'
@@ -228,7 +242,10 @@ def main() -> int:
         steps = len(json.loads(metrics_path.read_text())['steps']) if metrics_path.is_file() else 0
         figures = {'steps': steps, 'agents': args.agents, 'wall_s': round(wall, 1),
                    'exit_code': swarm.returncode,
-                   'rss': rss_figures(watcher.rss, args.warm_up * args.steps),
+                   'rss': rss_figures(watcher.rss, warm_up, window, args.steps),
+                   'rss_window': [warm_up, warm_up + window - 1, args.steps - window + 1,
+                                  args.steps],
+                   'rss_samples': watcher.rss,
                    'sizes': size_figures(watcher.sizes, output_bytes(run_dir), steps),
                    'left_running': sorted(p for p in watcher.pids if alive(p))}
     passed = report(figures, args.max_growth)

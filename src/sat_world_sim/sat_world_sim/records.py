@@ -164,7 +164,7 @@ class RunCollector(StepMessages):
             del self.statuses[key]
 
     def step_record(self, step: int) -> StepRecord:
-        """The StepRecord of a step whose truth is in, from the messages kept."""
+        """Build the StepRecord of a step whose truth is in from the messages kept."""
         return step_record(self.truths[step],
                            {i: self.statuses[(i, step)] for i in self.agent_ids
                             if (i, step) in self.statuses},

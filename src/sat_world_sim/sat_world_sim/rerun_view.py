@@ -73,7 +73,15 @@ from sat_world_sim.records import MODE_NAMES, step_record, StepMessages
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
-FILE_FLUSH_TICK_S = 2.0
+# File-only recordings cut each entity's chunks by size, not by time (the tick is a last
+# resort). The file sink keeps a manifest entry per chunk in memory until it writes the RRD
+# footer at the end (~6 KB each; `rerun rrd verify` needs the footer), so a chunk every 2 s per
+# entity made a long run's logger grow by ~16 KB per step; at FILE_CHUNK_ROWS steps per chunk
+# it is ~2 KB per step, while the batcher holds at most that many steps per entity (a saw-tooth
+# of ~20 MB with 4 agents).
+FILE_CHUNK_ROWS = 128
+FILE_CHUNK_BYTES = 1 << 20
+FILE_FLUSH_TICK_S = 3600.0
 # Distinct agent colours (the tab10 palette) and the truth's colour.
 PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (148, 103, 189), (140, 86, 75),
            (227, 119, 194), (188, 189, 34), (23, 190, 207)]
@@ -447,10 +455,12 @@ def new_recording(recording_id: Optional[str] = None,
                   live: bool = True) -> rr.RecordingStream:
     """Return a RecordingStream for a sat-swarm run (not the global one).
 
-    live=False (a file only) batches up to FILE_FLUSH_TICK_S of data per chunk: far fewer,
-    larger chunks, so the .rrd is smaller and loads faster.
+    live=False (a file only) batches up to FILE_CHUNK_ROWS steps or FILE_CHUNK_BYTES per entity
+    and chunk: far fewer, larger chunks, so the .rrd is smaller and loads faster, and the memory
+    the file sink keeps per chunk stays small over a long run.
     """
     batcher = None if live else rr.ChunkBatcherConfig(flush_tick=FILE_FLUSH_TICK_S,
-                                                      flush_num_bytes=8 << 20)
+                                                      flush_num_bytes=FILE_CHUNK_BYTES,
+                                                      flush_num_rows=FILE_CHUNK_ROWS)
     return rr.RecordingStream(APPLICATION_ID, recording_id=recording_id,
                               batcher_config=batcher)

@@ -1,0 +1,54 @@
+"""records.RunCollector: a long run's metrics from a bounded window of messages."""
+
+from test_rerun_logger import AGENTS, synthetic_messages
+
+from sat_world_sim.metrics import compute_metrics
+from sat_world_sim.records import RunCollector, SETTLE_STEPS, step_record
+
+
+def every_step_record(messages):
+    """The records built from every message of the run held in memory at once."""
+    truths, traffic, statuses = {}, {}, {}
+    for topic, msg in messages:
+        if topic == '/world/truth':
+            truths[msg.step] = msg
+        elif topic == '/world/radio':
+            traffic[msg.step] = msg
+        elif topic.endswith('/status'):
+            statuses.setdefault(msg.step, {})[msg.agent_id] = msg
+    return [step_record(truths[k], statuses[k], traffic[k], traffic.get(k - 1))
+            for k in sorted(truths)]
+
+
+def test_run_collector_keeps_a_window_of_steps_and_gives_the_same_metrics():
+    steps = 3 * SETTLE_STEPS + 5
+    messages = list(synthetic_messages(steps))
+    collector = RunCollector(AGENTS)
+    most_kept = 0
+    for topic, msg in messages:
+        collector.add(topic, msg)
+        most_kept = max(most_kept, len(collector.truths), len(collector.traffic),
+                        len(collector.statuses) // len(AGENTS))
+    # The window, the last settled step's traffic and the next step's messages before its truth.
+    assert most_kept <= SETTLE_STEPS + 2
+    assert collector.complete()
+    records = collector.records()
+    assert [r.step for r in records] == list(range(1, steps + 1))
+    assert compute_metrics(records, 'synthetic', 1) == \
+        compute_metrics(every_step_record(messages), 'synthetic', 1)
+    # Settled steps drop their plans; the last steps keep theirs (the trajectory plot's).
+    assert not records[0].plans and records[-1].plans
+
+
+def test_a_message_of_a_settled_step_is_dropped():
+    steps = SETTLE_STEPS + 10
+    messages = list(synthetic_messages(steps))
+    late = [(t, m) for t, m in messages if t == '/agent_2/status' and m.step == 2]
+    collector = RunCollector(AGENTS)
+    for topic, msg in messages:
+        if (topic, msg) not in late:
+            collector.add(topic, msg)
+    collector.add(*late[0])
+    assert (2, 2) not in collector.statuses
+    record = collector.records()[1]
+    assert record.step == 2 and set(record.modes) == {1}
