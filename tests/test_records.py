@@ -7,7 +7,7 @@ from sat_world_sim.records import RunCollector, SETTLE_STEPS, step_record
 
 
 def every_step_record(messages):
-    """The records built from every message of the run held in memory at once."""
+    """Build the records from every message of the run, all held in memory at once."""
     truths, traffic, statuses = {}, {}, {}
     for topic, msg in messages:
         if topic == '/world/truth':
