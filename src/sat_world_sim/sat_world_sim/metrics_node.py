@@ -3,7 +3,9 @@
 Subscribes to ``/world/step``, ``/world/truth``, ``/world/radio`` and every agent's ``status``
 and ``radio/out/search_density``, hands every message to records.RunCollector (the same code the
 offline replay of a bag uses) and, once the world's ``finished`` step and the last step's data
-are in, writes ``<run_dir>/metrics.json`` and ``<run_dir>/plots/*.png`` and exits.
+are in, writes ``<run_dir>/metrics.json`` and ``<run_dir>/plots/*.png`` and exits. Its memory
+stays flat over long runs: the collector keeps the messages of the last records.SETTLE_STEPS
+steps, a compact record of each earlier step and each agent's last search density.
 """
 
 import time

@@ -5,7 +5,8 @@ CDR bytes that crossed DDS (subscriptions are raw, nothing is re-serialised), wi
 definitions of sat_msgs and the publishers' QoS profiles, so ``ros2 bag play`` on a full Jazzy
 install (with sat_msgs built) plays it back. Timestamps are the receive times (ns since epoch).
 The MCAP chunks are zstd-compressed (rosbag2's MCAP storage reads them natively; metadata.yaml
-says no bag-level compression): the search densities, most of the bytes, shrink several-fold.
+says no bag-level compression): ~25 times smaller, mostly the search densities (a 4-agent
+soak: ~0.4 GB per 1,000 steps uncompressed, 14 MB compressed).
 The node closes the bag and exits after the world's final step, or on Ctrl-C.
 """
 
