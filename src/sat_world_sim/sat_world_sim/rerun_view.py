@@ -77,7 +77,7 @@ APPLICATION_ID = 'sat_swarm'
 # resort). The file sink keeps a manifest entry per chunk in memory until it writes the RRD
 # footer at the end (~6 KB each; `rerun rrd verify` needs the footer), so a chunk every 2 s per
 # entity made a long run's logger grow by ~16 KB per step; at FILE_CHUNK_ROWS steps per chunk
-# it is ~2 KB per step, while the batcher holds at most that many steps per entity (a saw-tooth
+# it is ~3 KB per step, while the batcher holds at most that many steps per entity (a saw-tooth
 # of ~20 MB with 4 agents).
 FILE_CHUNK_ROWS = 128
 FILE_CHUNK_BYTES = 1 << 20
