@@ -21,9 +21,10 @@ setup:
 lint: setup
 	@scripts/with_env.sh python -m flake8 src scripts tests
 
-# The Monte Carlo study behind README's evaluation: docs/evaluation*.{csv,md,png}.
+# The Monte Carlo study behind README's evaluation: docs/evaluation*.{csv,md,png} and the
+# table in README.md.
 evaluate: setup
-	@scripts/with_env.sh python scripts/evaluate.py $(EVAL_ARGS)
+	@scripts/with_env.sh python scripts/evaluate.py --readme README.md $(EVAL_ARGS)
 
 bench: setup
 	@scripts/with_env.sh python scripts/bench_filter.py

@@ -5,7 +5,7 @@ import pytest
 
 from sat_agent.config import load_params_file
 from sat_world_sim.evaluate import (
-    CONFIG_COLUMNS, main, METRICS, QUICK_STEPS, random_scenario, study_cells)
+    CONFIG_COLUMNS, main, METRICS, QUICK_STEPS, random_scenario, README_MARKERS, study_cells)
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.scenario import load_scenario
@@ -41,7 +41,10 @@ def test_the_design_has_every_policy_at_both_settings_and_one_factor_sweeps():
 @pytest.mark.timeout(300)
 def test_quick_study_writes_one_row_per_run_through_the_metrics_json_code(tmp_path, capsys):
     out = tmp_path / 'eval'
+    readme = tmp_path / 'README.md'
+    readme.write_text(f'# Title\n{README_MARKERS[0]}\nold table\n{README_MARKERS[1]}\nrest\n')
     assert main(['--quick', '--seeds', '1', '--jobs', '2', '--out', str(out),
+                 '--readme', str(readme),
                  '--params', str(CONFIG / 'paper.yaml'),
                  '--scenario', str(CONFIG / 'scenarios' / 'paper.yaml')]) == 0
     with open(out / 'evaluation.csv', encoding='utf-8') as stream:
@@ -58,7 +61,10 @@ def test_quick_study_writes_one_row_per_run_through_the_metrics_json_code(tmp_pa
     assert float(row['final_searched_pct']) == pytest.approx(summary['final_searched_pct'])
     table = (out / 'evaluation_summary.md').read_text()
     assert table.count('\n| paper |') == 5 and table.count('\n| random |') == 11
-    assert capsys.readouterr().out.strip() in table   # the table is printed too
+    printed = capsys.readouterr().out.strip()
+    assert printed.startswith('| setting |') and printed in table
+    assert readme.read_text() == (f'# Title\n{README_MARKERS[0]}\n{printed}\n'
+                                  f'{README_MARKERS[1]}\nrest\n')
     for name in ('evaluation_time.png', 'evaluation_detection.png', 'evaluation_sweeps.png'):
         assert (out / name).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     assert (out / 'evaluation_targets.csv').stat().st_size > 0
@@ -69,3 +75,7 @@ def test_bad_arguments_are_refused_with_exit_code_2(tmp_path, capsys):
     assert '--seeds = 0' in capsys.readouterr().err
     assert main(['--params', str(tmp_path / 'missing.yaml'), '--out', str(tmp_path)]) == 2
     assert 'missing.yaml' in capsys.readouterr().err
+    readme = tmp_path / 'README.md'
+    readme.write_text('# no markers\n')
+    assert main(['--readme', str(readme), '--out', str(tmp_path)]) == 2
+    assert 'markers' in capsys.readouterr().err

@@ -25,7 +25,7 @@ Run from the repository (defaults: config/paper.yaml, config/scenarios/paper.yam
 (one row per target), evaluation_summary.md (mean +- std and N per cell) and the figures of
 evaluation_plots.py. The summary table is printed too.
 
-    evaluate [--seeds 20] [--jobs 2] [--out docs] [--quick]
+    evaluate [--seeds 20] [--jobs 2] [--out docs] [--readme README.md] [--quick]
 """
 
 import argparse
@@ -233,10 +233,30 @@ def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, secon
     path.write_text(
         '# Evaluation summary\n\n'
         f'Mean ± std over N seeds per configuration; {len(rows)} runs in {seconds / 60:.1f} min '
-        f'on {os.cpu_count()} cores. Regenerate with `{command}`; one row per run in '
-        'evaluation.csv, the design in `sat_world_sim/evaluate.py`.\n\n'
+        f'on {os.cpu_count()} cores, made by `{command}` (`make evaluate` regenerates the whole '
+        'study); one row per run in evaluation.csv, the design in '
+        '`sat_world_sim/evaluate.py`.\n\n'
         f'{table}\n', encoding='utf-8')
     return table
+
+
+README_MARKERS = ('<!-- evaluation table: start (written by evaluate --readme) -->',
+                  '<!-- evaluation table: end -->')
+
+
+def _readme_parts(path: Path) -> tuple:
+    """Split a README around its table: (text up to the start marker, text from the end one)."""
+    text = path.read_text(encoding='utf-8')
+    start, end = (text.find(marker) for marker in README_MARKERS)
+    if start < 0 or end < start:
+        raise ValueError(f'{path}: the markers {README_MARKERS} are missing (in this order)')
+    return text[:start + len(README_MARKERS[0])], text[end:]
+
+
+def update_readme(path: Path, table: str) -> None:
+    """Replace the table between README_MARKERS in path, so the README shows the last study."""
+    head, tail = _readme_parts(path)
+    path.write_text(f'{head}\n{table}\n{tail}', encoding='utf-8')
 
 
 def main(argv=None) -> int:
@@ -250,6 +270,8 @@ def main(argv=None) -> int:
                         help='ROS 2 parameter file of the base parameters')
     parser.add_argument('--scenario', default='config/scenarios/paper.yaml',
                         help="the paper's scenario file")
+    parser.add_argument('--readme', default=None,
+                        help='also write the summary table into this README (between markers)')
     parser.add_argument('--quick', action='store_true',
                         help=f'smoke test: {QUICK_STEPS} steps per run (every cell, --seeds)')
     args = parser.parse_args(argv)
@@ -260,6 +282,8 @@ def main(argv=None) -> int:
     try:
         base = load_params_file(args.params)
         paper = load_scenario(args.scenario, base.area.width, base.area.height)
+        if args.readme:
+            _readme_parts(Path(args.readme))   # refuse a README without markers before the runs
     except (ValueError, OSError) as error:
         print(f'error: {error}', file=sys.stderr)
         return 2
@@ -278,9 +302,11 @@ def main(argv=None) -> int:
     figures = write_figures(cells, results, out)
     seconds = time.perf_counter() - started
     given = sys.argv[1:] if argv is None else list(argv)
-    command = 'evaluate ' + ' '.join(given) if given else 'make evaluate'
+    command = ' '.join(['evaluate'] + given)
 
     table = write_summary(cells, rows, out / 'evaluation_summary.md', seconds, command)
+    if args.readme:
+        update_readme(Path(args.readme), table)
     print(table)
     print(f'{len(rows)} runs in {seconds:.0f} s; wrote {out / "evaluation.csv"}, '
           f'{out / "evaluation_summary.md"} and {len(figures)} figures', file=sys.stderr)
