@@ -31,7 +31,7 @@ evaluation_plots.py. The summary table is printed too.
 import argparse
 from concurrent.futures import as_completed, ProcessPoolExecutor
 import csv
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 import os
 from pathlib import Path
 import sys
@@ -58,6 +58,7 @@ LIFETIME = (50, 150)
 SPEED_STD = 0.5
 # As in the paper's scenario: near-constant velocity, arriving near the scripted end.
 TRUTH_PROCESS_NOISE = 1e-5
+# Agents start half a sensing square inside the area, so their first scan is all in the area.
 EDGE = 5.0
 QUICK_STEPS = 15
 
@@ -69,7 +70,8 @@ POLICY_LABELS = {
     ('sat', 'ortools', True): 'SAT-PHD + OR-Tools',
 }
 
-# Columns of evaluation.csv after the configuration and the seed; the names of metrics.py.
+# Columns of evaluation.csv: the configuration (Cell fields), the seed, then the metrics (names
+# of metrics.py's summary, plus the area searched at k = 100 and the run's wall time).
 METRICS = ('mean_ospa', 'mean_ospa_loc', 'mean_ospa_card', 'mean_time_to_detection',
            'detected_share', 'tracked_share', 'searched_pct_100', 'final_searched_pct',
            'duplicate_tracking_steps', 'messages_per_agent_step', 'bytes_per_agent_step',
@@ -101,11 +103,8 @@ class Cell:
 
 def policy_cells(setting: str, agents: int) -> List[Cell]:
     """Return every policy of the comparison at one setting (module docstring)."""
-    cells = []
-    for (policy, planner, radio), label in POLICY_LABELS.items():
-        cells.append(Cell(setting, label, policy, planner, agents,
-                          comm_range=50.0 if radio else 0.0))
-    return cells
+    return [Cell(setting, label, policy, planner, agents, comm_range=50.0 if radio else 0.0)
+            for (policy, planner, radio), label in POLICY_LABELS.items()]
 
 
 def study_cells(steps: int = STEPS) -> List[Cell]:
@@ -158,7 +157,8 @@ def run_one(cell: Cell, seed: int, base: SatParams, paper: Scenario) -> dict:
     steps = metrics['steps']
     summary = dict(metrics['summary'], seconds=run.seconds,
                    searched_pct_100=steps[min(100, len(steps)) - 1]['searched_pct'])
-    row = dict(asdict(cell), seed=int(seed), **{k: summary[k] for k in METRICS})
+    row = {name: getattr(cell, name) for name in CONFIG_COLUMNS}
+    row.update(seed=int(seed), **{name: summary[name] for name in METRICS})
     return {'row': row, 'cell': cell,
             'targets': [dict(t, label=cell.label, setting=cell.setting, seed=int(seed))
                         for t in metrics['targets']],
