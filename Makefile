@@ -1,9 +1,11 @@
 # The two commands of README.md. Both set everything up on first use (scripts/setup_env.sh):
 # the project's venv from PyPI, the ROS 2 wheels' CMake fix, and the colcon workspace.
-.PHONY: run test setup lint bench clean
+.PHONY: run test setup lint bench evaluate clean
 
 # Arguments for `make run` (e.g. make run RUN_ARGS="--name demo").
 RUN_ARGS ?=
+# Arguments for `make evaluate` (e.g. make evaluate EVAL_ARGS="--seeds 5 --out /tmp/eval").
+EVAL_ARGS ?=
 # Arguments for pytest in `make test` (e.g. make test PYTEST_ARGS="-k msgs").
 PYTEST_ARGS ?=
 
@@ -18,6 +20,11 @@ setup:
 
 lint: setup
 	@scripts/with_env.sh python -m flake8 src scripts tests
+
+# The Monte Carlo study behind README's evaluation: docs/evaluation*.{csv,md,png} and the
+# table in README.md.
+evaluate: setup
+	@scripts/with_env.sh python scripts/evaluate.py --readme README.md $(EVAL_ARGS)
 
 bench: setup
 	@scripts/with_env.sh python scripts/bench_filter.py

@@ -40,10 +40,11 @@ def started(command, log_path: Path):
             stop_group(process, grace=10.0)
 
 
-def run_swarm(run_dir: Path, scenario: Path, *extra, timeout: float = 600.0):
+def run_swarm(run_dir: Path, scenario: Path, *extra, timeout: float = 600.0,
+              params: Path = PARAMS):
     """Run the bring-up (`swarm`) to completion; return (exit code, metrics or None, output)."""
     command = [sys.executable, executable('sat_world_sim', 'swarm'), '--scenario', str(scenario),
-               '--params', str(PARAMS), '--run-dir', str(run_dir),
+               '--params', str(params), '--run-dir', str(run_dir),
                '--domain-id', os.environ['ROS_DOMAIN_ID'], *extra]
     result = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
     metrics_path = run_dir / 'metrics.json'

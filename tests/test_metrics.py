@@ -60,7 +60,7 @@ def test_per_step_ospa_counts_and_modes_are_hand_checked():
 def test_target_first_in_view_first_detected_and_delay():
     (target,) = compute_metrics(small_run(), 'tiny', 9)['targets']
     assert target == {'id': 0, 'born': 2, 'died': 4, 'first_in_view': 3, 'first_detected': 4,
-                      'detection_delay': 1}
+                      'detection_delay': 1, 'time_to_detection': 2}
 
 
 def test_radio_totals_overlap_events_and_json_round_trip(tmp_path):
@@ -80,8 +80,35 @@ def test_a_target_never_seen_has_no_delay_and_a_live_one_no_death():
     records = [record(k, [[90.0, 90.0]], {1: (10.0, 10.0)}, {1: []}, {1: 'SEARCH'})
                for k in (1, 2, 3)]
     (target,) = compute_metrics(records, 's', 1)['targets']
+    # Never detected: the time to detection is censored at the 3 steps it was alive.
     assert target == {'id': 0, 'born': 1, 'died': None, 'first_in_view': None,
-                      'first_detected': None, 'detection_delay': None}
+                      'first_detected': None, 'detection_delay': None, 'time_to_detection': 3}
+
+
+def test_evaluation_summary_of_the_hand_checked_run():
+    summary = compute_metrics(small_run(), 'tiny', 9)['summary']
+    # OSPA parts per step: loc (0, 0, 10, 3, 0), card (0, 10, 0, 0, 10).
+    assert summary['mean_ospa_loc'] == pytest.approx(13.0 / 5)
+    assert summary['mean_ospa_card'] == pytest.approx(20.0 / 5)
+    assert summary['targets'] == 1 and summary['detected_share'] == 1.0
+    assert summary['mean_time_to_detection'] == 2
+    # The target is alive at steps 2-4 and tracked (estimate within 5 m) at step 4 only.
+    assert summary['tracked_share'] == pytest.approx(1.0 / 3)
+    assert summary['duplicate_tracking_steps'] == 0
+    # 3 messages and 320 bytes from 2 agents over 5 steps.
+    assert summary['messages_per_agent_step'] == pytest.approx(0.3)
+    assert summary['bytes_per_agent_step'] == pytest.approx(32.0)
+
+
+def test_two_agents_near_one_target_are_a_duplicate():
+    records = [record(k, [[50.0, 50.0]], {1: (50, 50), 2: (52, 50)},
+                      {1: [[50.0, 51.0]], 2: [[50.0, 49.0]] if k > 1 else []},
+                      {1: 'TRACK', 2: 'TRACK'}) for k in (1, 2, 3)]
+    metrics = compute_metrics(records, 's', 1)
+    assert [s['n_duplicate'] for s in metrics['steps']] == [0, 1, 1]
+    assert [s['n_tracked'] for s in metrics['steps']] == [1, 1, 1]
+    assert metrics['summary']['duplicate_tracking_steps'] == 2
+    assert metrics['summary']['tracked_share'] == 1.0
 
 
 def test_swarm_estimate_merges_duplicates_within_the_merge_distance():

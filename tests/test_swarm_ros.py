@@ -15,8 +15,12 @@ import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from ros_harness import executable, PARAMS, REPO, run_swarm, started, write_scenario
 
+from sat_agent.config import load_params_file
 from sat_msgs.msg import AgentStatus, SearchDensity, WorldStep
+from sat_world_sim.inprocess_swarm import run_swarm as run_inprocess
+from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.observer import ReadyAnnouncer
+from sat_world_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.ros
 RELIABLE = QoSProfile(depth=300, reliability=ReliabilityPolicy.RELIABLE)
@@ -158,6 +162,43 @@ def test_lock_step_runs_with_one_seed_give_identical_metrics(tmp_path):
         texts.append((tmp_path / name / 'metrics.json').read_text())
     assert texts[0] == texts[1]
     assert json.loads(texts[0])['seed'] == 5
+
+
+def inprocess_metrics(scenario, params=PARAMS):
+    """metrics.json of the in-process swarm for the same files, as read back from JSON."""
+    run = run_inprocess(load_scenario(scenario), load_params_file(params))
+    return json.loads(json.dumps(compute_metrics(run.records, run.scenario.name,
+                                                 run.scenario.seed)))
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_the_ros_paper_run_gives_the_in_process_metrics(paper_run):
+    _, code, metrics, output = paper_run
+    assert code == 0, output[-3000:]
+    # Every step's OSPA, counts, coverage and modes, every target, overlap event and radio
+    # count: the lock-step graph is the in-process loop with real transport.
+    assert metrics == inprocess_metrics(PAPER)
+
+
+@pytest.mark.timeout(300)
+def test_a_random_birth_baseline_swarm_gives_the_in_process_metrics(tmp_path):
+    # Three agents in range of each other, random births and the random-walk baseline (its own
+    # random stream) for 40 steps: the ROS run must draw the same numbers.
+    scenario = write_scenario(
+        tmp_path / 'births.yaml', name='births', seed=4, steps=40, truth_process_noise=1.0,
+        agents=[{'id': 1, 'start': [40.0, 50.0]}, {'id': 2, 'start': [60.0, 50.0]},
+                {'id': 3, 'start': [50.0, 40.0]}],
+        random_births={'rate': 0.1, 'survival': 0.99, 'speed_std': 0.5},
+        targets=[{'id': 1, 'born': 1, 'died': 40, 'start': [45.0, 50.0], 'end': [55.0, 50.0]}])
+    params = tmp_path / 'random_walk.yaml'
+    params.write_text(PARAMS.read_text().replace('policy: sat', 'policy: random_walk'))
+    code, metrics, output = run_swarm(tmp_path / 'run', scenario, '--no-record', '--no-view',
+                                      params=params)
+    assert code == 0, output[-3000:]
+    expected = inprocess_metrics(scenario, params)
+    assert len(expected['targets']) > 1 and expected['radio']['3']['messages'] > 0
+    assert metrics == expected
 
 
 @pytest.mark.timeout(300)

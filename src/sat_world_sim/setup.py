@@ -26,6 +26,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
+            'evaluate = sat_world_sim.evaluate:main',
             'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
             'logger = sat_world_sim.logger_node:main',
             'metrics = sat_world_sim.metrics_node:main',

@@ -44,6 +44,7 @@ from sat_agent.actions import candidate_poses
 from sat_agent.config import SatParams
 from sat_agent.mode_machine import Mode, ModeMachine
 from sat_agent.phd_filter import SatPhdFilter
+from sat_agent.search_baselines import baseline_policy
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import SearchMap
 from sat_agent.search_planning import ReplanReason, search_action, SearchPlanner
@@ -152,6 +153,9 @@ class Agent:
         self.filter = SatPhdFilter(params, self._rng)
         self.search_map = SearchMap.for_area(params.area, params.search.node_spacing)
         self.planner = SearchPlanner(self.search_map, params)
+        # The evaluation's baselines (search.policy); None for the paper's closed walks.
+        self.baseline = baseline_policy(params, self.search_map, self.agent_id, initial_pose,
+                                        seed)
         self.modes = ModeMachine(params)
         self.overlap = OverlapMonitor(params)
         self._scratch = SearchDensity(self.filter.search.lattice)
@@ -199,7 +203,7 @@ class Agent:
         leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
         mode = self.modes.update(len(estimate.targets), leaving_for is not None)
         replan = ReplanReason.NONE
-        if mode == Mode.SEARCH:
+        if mode == Mode.SEARCH and self.baseline is None:
             replan = self._search_plan(pose, reports, searchers, resumed=was_tracking)
         self._previous_searchers = searchers
         # The report carries the posterior (fused) density of step k, in float32 as on the wire,
@@ -212,6 +216,8 @@ class Agent:
             action, _ = tracking_action(self.filter.targets, look, pose, self.params)
             goal = candidate_poses(pose, self.params.actions)[action]
             plan = self.planner.walk_points()
+        elif mode == Mode.SEARCH and self.baseline is not None:
+            action, goal, plan = self.baseline.choose(pose)
         elif mode == Mode.SEARCH:
             goal = self._search_goal(pose)
             action = search_action(pose, goal, self.params)

@@ -33,6 +33,13 @@ def _check(key: str, value: Any, low: float, high: float, *, low_open=False, hig
 
 
 INF = math.inf
+SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk')
+SEARCH_PLANNERS = ('greedy', 'ortools')
+
+
+def _choice(key: str, value: Any, allowed) -> None:
+    if value not in allowed:
+        raise ParameterError(f"parameter '{key}' = {value!r}: allowed values are {list(allowed)}")
 
 
 @dataclass(frozen=True)
@@ -196,6 +203,13 @@ class SearchParams:
     # Steps a searching agent may spend looking at one tentative peak (agent_core): enough
     # for confirm_scans more scans from a stand-off, short enough to keep the search going.
     investigate_steps: int = 4
+    # How a searching agent moves: 'sat' is the paper's (closed walks over the search map,
+    # joint plans in range); 'lawnmower' and 'random_walk' are the evaluation's baselines
+    # (search_baselines.py). The filter, tracking and mode machine are the same for all.
+    policy: str = 'sat'
+    # How the 'sat' closed walks are made: 'greedy' is the paper's path-cheapest-arc;
+    # 'ortools' improves the greedy walks by OR-Tools local search (routing.py).
+    planner: str = 'greedy'
 
     def validate(self, prefix='search'):
         _check(f'{prefix}.decay', self.decay, 0, 1)
@@ -204,6 +218,8 @@ class SearchParams:
         _check(f'{prefix}.unvisited_threshold', self.unvisited_threshold, 0, 1, high_open=True)
         _check(f'{prefix}.revisit_share', self.revisit_share, 0, 1)
         _check(f'{prefix}.investigate_steps', self.investigate_steps, 0, 10000)
+        _choice(f'{prefix}.policy', self.policy, SEARCH_POLICIES)
+        _choice(f'{prefix}.planner', self.planner, SEARCH_PLANNERS)
 
 
 @dataclass(frozen=True)
@@ -322,6 +338,10 @@ def _build_group(name: str, cls, given: Mapping[str, Any]):
     for key, value in given.items():
         default = getattr(cls(), key)
         if isinstance(default, bool) or is_dataclass(default):
+            values[key] = value
+        elif isinstance(default, str):
+            if not isinstance(value, str):
+                raise ParameterError(f"parameter '{name}.{key}' = {value!r}: must be a string")
             values[key] = value
         elif isinstance(default, int):
             if isinstance(value, bool) or not float(_number(name, key, value)).is_integer():

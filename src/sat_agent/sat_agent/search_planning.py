@@ -103,6 +103,17 @@ def joint_plan(starts: Mapping[int, Sequence[float]], centers: np.ndarray,
     return dict(zip(ids, walks))
 
 
+def planned_walks(starts: Mapping[int, Sequence[float]], centers: np.ndarray,
+                  nodes: Sequence[int], planner: str = 'greedy') -> dict:
+    """joint_plan's walks, improved by OR-Tools local search when planner is 'ortools'."""
+    walks = joint_plan(starts, centers, nodes)
+    if planner == 'ortools':
+        # Imported here: OR-Tools (and its protobuf runtime) loads only when it is chosen.
+        from sat_agent.routing import improve_walks
+        walks = improve_walks(starts, centers, walks)
+    return walks
+
+
 def walk_cost(start, centers: np.ndarray, walk: Sequence[int]) -> float:
     """Length of the closed walk start -> walk nodes in order -> start."""
     route = np.vstack([_point(start), np.asarray(centers, dtype=float)[list(walk)],
@@ -244,7 +255,7 @@ class SearchPlanner:
         if self._reason == ReplanReason.EXHAUSTED:
             self._plan_alone(own_id, own_start, nodes)
         else:
-            walks = joint_plan(starts, self._map.centers, nodes)
+            walks = planned_walks(starts, self._map.centers, nodes, search.planner)
             self._walk = np.asarray(walks.pop(int(own_id)), dtype=np.int64)
             self._claims = np.asarray(sum(walks.values(), []), dtype=np.int64)
             self._group = frozenset(int(agent) for agent in starts)
@@ -258,8 +269,9 @@ class SearchPlanner:
         if not unclaimed.size:
             unclaimed = nodes
             self._claims = np.zeros(0, dtype=np.int64)
-        self._walk = np.asarray(greedy_closed_walk(start, self._map.centers, unclaimed),
-                                dtype=np.int64)
+        walks = planned_walks({own_id: start}, self._map.centers, unclaimed,
+                              self._params.search.planner)
+        self._walk = np.asarray(walks[own_id], dtype=np.int64)
         self._group = self._group | {int(own_id)}
 
     def next_goal(self):

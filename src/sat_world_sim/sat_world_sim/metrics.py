@@ -15,6 +15,11 @@ Definitions (the paper leaves them open):
 - ``first_detected``: first step, at or after the target's birth, with some agent's estimate
   within ``detection_radius`` of the target's true position.
 - ``detection_delay`` = first_detected - first_in_view (None when either is None).
+- ``time_to_detection`` = first_detected - born, the search-and-track figure of merit; for a
+  target never detected it is censored at the steps it was alive in the records (flagged by
+  ``first_detected`` None), so policies that miss targets are not rewarded for it.
+- Tracked target at step k: some agent's estimate within ``detection_radius`` of it
+  (``n_tracked``); tracked by two or more agents at once: a duplicate (``n_duplicate``).
 - ``born`` / ``died``: first and last step the target is alive in the records (``died`` is None
   when it is still alive at the last recorded step).
 """
@@ -98,6 +103,8 @@ def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
     """
     records = sorted(records, key=lambda r: r.step)
     steps = [_step_metrics(r, config) for r in records]
+    targets = _target_metrics(records, config)
+    radio = _radio_metrics(records)
     return {
         'scenario': scenario,
         'seed': int(seed),
@@ -105,11 +112,11 @@ def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
                    'merge_distance': config.merge_distance,
                    'detection_radius': config.detection_radius},
         'steps': steps,
-        'targets': _target_metrics(records, config),
+        'targets': targets,
         'overlap_events': [dict(e) for r in records for e in r.overlap_events],
-        'radio': _radio_metrics(records),
+        'radio': radio,
         'late_commands': int(late_commands),
-        'summary': _summary(steps),
+        'summary': _summary(steps, targets, radio),
     }
 
 
@@ -124,6 +131,7 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
     truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
     estimate = swarm_estimate(record.estimates, config.merge_distance)
     result = ospa(truth, estimate, config.cutoff, config.order)
+    trackers = _trackers(truth, record.estimates, config.detection_radius)
     modes = {str(a): str(record.modes[a]) for a in sorted(record.modes)}
     return {
         'step': int(record.step),
@@ -135,6 +143,8 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
         'searched_pct': 100.0 * float(record.searched_fraction),
         'tracking': any(m == 'TRACK' for m in modes.values()),
         'modes': modes,
+        'n_tracked': int(np.count_nonzero(trackers >= 1)),
+        'n_duplicate': int(np.count_nonzero(trackers >= 2)),
     }
 
 
@@ -145,12 +155,13 @@ def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig) -> Lis
         ids = np.asarray(record.truth_ids, dtype=int).reshape(-1)
         truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
         in_view = _in_any_square(truth, record.agent_poses, config.sensor_side)
-        detected = _near_any_estimate(truth, record.estimates, config.detection_radius)
+        detected = _trackers(truth, record.estimates, config.detection_radius) > 0
         for row, target_id in enumerate(ids.tolist()):
             entry = targets.setdefault(target_id, {'id': target_id, 'born': record.step,
                                                    'died': None, 'first_in_view': None,
                                                    'first_detected': None})
             entry['last_seen_alive'] = record.step
+            entry['alive_steps'] = entry.get('alive_steps', 0) + 1
             if in_view[row] and entry['first_in_view'] is None:
                 entry['first_in_view'] = record.step
             if detected[row] and entry['first_detected'] is None:
@@ -162,6 +173,8 @@ def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig) -> Lis
         entry['died'] = None if last == last_step else last
         seen, found = entry['first_in_view'], entry['first_detected']
         entry['detection_delay'] = None if seen is None or found is None else found - seen
+        alive = entry.pop('alive_steps')
+        entry['time_to_detection'] = alive if found is None else found - entry['born']
         result.append(entry)
     return result
 
@@ -173,13 +186,15 @@ def _in_any_square(points: np.ndarray, poses: Mapping[int, np.ndarray], side: fl
     return mask
 
 
-def _near_any_estimate(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
-    found = [np.asarray(e, dtype=float).reshape(-1, 2) for e in estimates.values()]
-    stacked = np.vstack(found) if found else np.zeros((0, 2))
-    if not len(points) or not len(stacked):
-        return np.zeros(len(points), dtype=bool)
-    gaps = np.linalg.norm(points[:, None, :] - stacked[None, :, :], axis=2)
-    return np.any(gaps <= radius, axis=1)
+def _trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
+    """Per true point, how many agents have an estimate within radius of it."""
+    counts = np.zeros(len(points), dtype=int)
+    for estimate in estimates.values():
+        found = np.asarray(estimate, dtype=float).reshape(-1, 2)
+        if len(points) and len(found):
+            gaps = np.linalg.norm(points[:, None, :] - found[None, :, :], axis=2)
+            counts += np.any(gaps <= radius, axis=1)
+    return counts
 
 
 def _radio_metrics(records: Sequence[StepRecord]) -> dict:
@@ -189,14 +204,32 @@ def _radio_metrics(records: Sequence[StepRecord]) -> dict:
             for a in agents}
 
 
-def _summary(steps: List[dict]) -> dict:
+def _summary(steps: List[dict], targets: List[dict], radio: dict) -> dict:
+    """Per-run figures of the Monte Carlo evaluation (time averages over every step)."""
     tracked = [s['ospa'] for s in steps if s['tracking']]
+    target_steps = sum(s['n_true'] for s in steps)
+    agents = {a for s in steps for a in s['modes']}
+    agent_steps = max(len(agents), 1) * max(len(steps), 1)
     return {
         'mean_ospa': _mean([s['ospa'] for s in steps]),
+        'mean_ospa_loc': _mean([s['ospa_loc'] for s in steps]),
+        'mean_ospa_card': _mean([s['ospa_card'] for s in steps]),
         'mean_ospa_tracking': _mean(tracked),
         'tracking_steps': len(tracked),
         'final_searched_pct': steps[-1]['searched_pct'] if steps else 0.0,
+        'targets': len(targets),
+        'detected_share': _share(sum(t['first_detected'] is not None for t in targets),
+                                 len(targets)),
+        'mean_time_to_detection': _mean([t['time_to_detection'] for t in targets]),
+        'tracked_share': _share(sum(s['n_tracked'] for s in steps), target_steps),
+        'duplicate_tracking_steps': sum(1 for s in steps if s['n_duplicate']),
+        'messages_per_agent_step': sum(r['messages'] for r in radio.values()) / agent_steps,
+        'bytes_per_agent_step': sum(r['bytes'] for r in radio.values()) / agent_steps,
     }
+
+
+def _share(part: int, whole: int) -> Optional[float]:
+    return float(part) / whole if whole else None
 
 
 def _mean(values: Sequence[float]) -> Optional[float]:
