@@ -90,13 +90,13 @@ def test_evaluation_summary_of_the_hand_checked_run():
     # OSPA parts per step: loc (0, 0, 10, 3, 0), card (0, 10, 0, 0, 10).
     assert summary['mean_ospa_loc'] == pytest.approx(13.0 / 5)
     assert summary['mean_ospa_card'] == pytest.approx(20.0 / 5)
-    assert summary['targets'] == 1 and summary['detected_share'] == 1.0
+    assert summary['targets_to_detect'] == 1 and summary['detected_share'] == 1.0
     assert summary['mean_time_to_detection'] == 2
     # The target is alive at steps 2-4 and tracked (estimate within 5 m) at step 4 only.
     assert summary['tracked_share'] == pytest.approx(1.0 / 3)
     assert summary['duplicate_tracking_steps'] == 0
     # 3 messages and 320 bytes from 2 agents over 5 steps.
-    assert summary['messages_per_agent_step'] == pytest.approx(0.3)
+    assert summary['radio_msgs_per_agent_step'] == pytest.approx(0.3)
     assert summary['bytes_per_agent_step'] == pytest.approx(32.0)
 
 

@@ -74,8 +74,8 @@ POLICY_LABELS = {
 # of metrics.py's summary, plus the area searched at k = 100 and the run's wall time).
 METRICS = ('mean_ospa', 'mean_ospa_loc', 'mean_ospa_card', 'mean_time_to_detection',
            'detected_share', 'tracked_share', 'searched_pct_100', 'final_searched_pct',
-           'duplicate_tracking_steps', 'messages_per_agent_step', 'bytes_per_agent_step',
-           'targets', 'seconds')
+           'duplicate_tracking_steps', 'radio_msgs_per_agent_step', 'bytes_per_agent_step',
+           'targets_to_detect', 'wall_time_s')
 CONFIG_COLUMNS = ('setting', 'label', 'policy', 'planner', 'agents', 'clutter', 'comm_range',
                   'steps')
 
@@ -155,7 +155,7 @@ def run_one(cell: Cell, seed: int, base: SatParams, paper: Scenario) -> dict:
     run = run_swarm(scenario, cell.params(base))
     metrics = compute_metrics(run.records, scenario.name, seed)
     steps = metrics['steps']
-    summary = dict(metrics['summary'], seconds=run.seconds,
+    summary = dict(metrics['summary'], wall_time_s=run.seconds,
                    searched_pct_100=steps[min(100, len(steps)) - 1]['searched_pct'])
     row = {name: getattr(cell, name) for name in CONFIG_COLUMNS}
     row.update(seed=int(seed), **{name: summary[name] for name in METRICS})
@@ -202,7 +202,7 @@ TABLE = (('OSPA (m)', 'mean_ospa', 1.0, 2), ('loc. (m)', 'mean_ospa_loc', 1.0, 2
          ('searched % k=100', 'searched_pct_100', 1.0, 1),
          ('searched % final', 'final_searched_pct', 1.0, 1),
          ('duplicate steps', 'duplicate_tracking_steps', 1.0, 1),
-         ('msgs/agent/step', 'messages_per_agent_step', 1.0, 2),
+         ('msgs/agent/step', 'radio_msgs_per_agent_step', 1.0, 2),
          ('kB/agent/step', 'bytes_per_agent_step', 1e-3, 1))
 
 

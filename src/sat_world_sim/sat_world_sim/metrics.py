@@ -217,13 +217,13 @@ def _summary(steps: List[dict], targets: List[dict], radio: dict) -> dict:
         'mean_ospa_tracking': _mean(tracked),
         'tracking_steps': len(tracked),
         'final_searched_pct': steps[-1]['searched_pct'] if steps else 0.0,
-        'targets': len(targets),
+        'targets_to_detect': len(targets),
         'detected_share': _share(sum(t['first_detected'] is not None for t in targets),
                                  len(targets)),
         'mean_time_to_detection': _mean([t['time_to_detection'] for t in targets]),
         'tracked_share': _share(sum(s['n_tracked'] for s in steps), target_steps),
         'duplicate_tracking_steps': sum(1 for s in steps if s['n_duplicate']),
-        'messages_per_agent_step': sum(r['messages'] for r in radio.values()) / agent_steps,
+        'radio_msgs_per_agent_step': sum(r['messages'] for r in radio.values()) / agent_steps,
         'bytes_per_agent_step': sum(r['bytes'] for r in radio.values()) / agent_steps,
     }
 
