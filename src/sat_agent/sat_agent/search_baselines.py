@@ -26,7 +26,8 @@ from sat_agent.search_map import SearchMap
 from sat_agent.search_planning import search_action
 from sat_agent.sensor_model import in_sensing_square
 
-# spawn_key of the random walk's generator; the filter's generator uses (agent_id,).
+# Last spawn_key element of the random walk's generator, keyed (agent_id, this): apart from the
+# world's streams ((0,), (1,), ...) and the filter's ((agent_core.FILTER_STREAM, agent_id)).
 RANDOM_WALK_STREAM = 1
 
 
