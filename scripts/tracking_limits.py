@@ -23,13 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from sat_agent import motion_model, sensor_model
-from sat_agent.agent_core import Agent
 from sat_agent.config import load_params_file, SatParams
 from sat_agent.phd_filter import SatPhdFilter
-from sat_world_sim.inprocess_swarm import run_swarm
+from sat_world_sim.inprocess_swarm import InProcessSwarm, run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.scenario import load_scenario
-from sat_world_sim.world_model import World
 
 ROOT = Path(__file__).resolve().parents[1]
 SINGLE = ROOT / 'config' / 'scenarios' / 'single_target.yaml'
@@ -69,22 +67,16 @@ def single_agent_ospa(params: SatParams, first_seed: int, seeds: int = 10) -> fl
 
 
 def peaks_seen(params: SatParams, seed: int, steps: int):
-    """Per step: the truth and the (predicted position, mass) of every peak the agent reports."""
+    """Per step: the truth and the (position, predicted position, mass) of every peak seen."""
     scenario = load_scenario(SINGLE).with_seed(seed)
-    world = World(scenario, params)
-    start = scenario.agents[0]
-    agent = Agent(start.agent_id, params, start.start, seed=seed)
+    swarm = InProcessSwarm(scenario, params)
+    (agent_id,) = scenario.agent_ids
     for _ in range(steps):
-        truth = world.truth().positions
-        pose = world.poses()[start.agent_id]
-        scan = world.scan_all()[start.agent_id]
-        output = agent.step(world.step, pose, scan.measurements, [])
-        estimate = output.estimate
+        record = swarm.step()
+        estimate = swarm.last_outputs[agent_id].estimate
         peaks = [(t.position, t.position + t.velocity, t.weight) for t in estimate.tentative]
         peaks += [(t.position, t.position + t.velocity, 1.0) for t in estimate.targets]
-        yield truth, peaks
-        world.apply_actions({start.agent_id: output.action})
-        world.advance()
+        yield record.truth_positions, peaks
 
 
 def trigger_rates(params: SatParams, seeds: int, steps: int = 30) -> dict:

@@ -59,6 +59,8 @@ class InProcessSwarm:
             for a in scenario.agents}
         self._outbox: Dict[int, AgentReport] = {}
         self._links = frozenset()
+        # Each agent's output of the last step (estimates with tentative peaks, plans, ...).
+        self.last_outputs: Dict[int, AgentOutput] = {}
 
     def inbox(self, agent_id: int) -> List[AgentReport]:
         """Return the reports of step k-1 from the agents within C_R of agent_id at step k-1."""
@@ -80,6 +82,7 @@ class InProcessSwarm:
         moves = self.world.apply_actions({a: o.action for a, o in outputs.items()})
         self.world.advance()
         self._outbox = {a: o.report for a, o in outputs.items()}
+        self.last_outputs = outputs
         self._links = links
         receivers = {a: sum(1 for pair in links if a in pair) for a in outputs}
         return StepRecord(
