@@ -101,12 +101,18 @@ def test_a_neighbour_leaving_search_releases_its_nodes():
     assert len(after) > len(before) + 20
 
 
-def test_late_reports_only_add_their_density():
+def agent_and_neighbour_report(neighbour_pose):
+    """Run step 1 of agent 1 at (50, 50) and agent 2 at neighbour_pose; return 1 and 2's report."""
     params = small_params()
     agent = Agent(1, params, (50.0, 50.0), seed=1)
-    other = Agent(2, params, (20.0, 20.0), seed=1)
-    late = other.step(1, (20.0, 20.0), NO_MEASUREMENTS, []).report
+    other = Agent(2, params, neighbour_pose, seed=1)
+    report = other.step(1, neighbour_pose, NO_MEASUREMENTS, []).report
     agent.step(1, (50.0, 50.0), NO_MEASUREMENTS, [])
+    return agent, report
+
+
+def test_late_reports_only_add_their_density():
+    agent, late = agent_and_neighbour_report((20.0, 20.0))
     agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [])
     # A report of step 1 read at step 3 (two steps of radio latency).
     out = agent.step(3, (50.0, 50.0), NO_MEASUREMENTS, [late])
@@ -117,11 +123,7 @@ def test_late_reports_only_add_their_density():
 
 
 def test_foreign_and_malformed_reports_are_dropped():
-    params = small_params()
-    agent = Agent(1, params, (50.0, 50.0), seed=1)
-    other = Agent(2, params, (60.0, 50.0), seed=1)
-    report = other.step(1, (60.0, 50.0), NO_MEASUREMENTS, []).report
-    agent.step(1, (50.0, 50.0), NO_MEASUREMENTS, [])
+    agent, report = agent_and_neighbour_report((60.0, 50.0))
     bad_shape = dataclasses.replace(report, search_values=np.zeros((3, 3)))
     nan_pose = dataclasses.replace(report, pose=np.array([np.nan, 1.0]))
     own = dataclasses.replace(report, agent_id=1)
