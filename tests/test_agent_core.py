@@ -143,15 +143,22 @@ def target_measurements(target, rng):
     return measurements
 
 
-def test_agent_detects_a_target_in_view_and_switches_to_tracking_control():
+def hover_over_walking_target(steps):
+    """Run an agent the world holds at (50, 50) for steps scans of a target walking past it.
+
+    Returns (params, pose, target(k), the agent, its outputs of steps 1..steps).
+    """
     params = small_params()
     pose = np.array([50.0, 50.0])
     agent = Agent(1, params, pose, seed=4)
     target = (lambda k: np.array([52.0 + 0.3 * k, 51.0]))
     measurements = target_measurements(target, np.random.default_rng(0))
-    outputs = []
-    for k in range(1, 7):   # the world holds the agent: six scans of the same scene
-        outputs.append(agent.step(k, pose, measurements(k, pose), []))
+    outputs = [agent.step(k, pose, measurements(k, pose), []) for k in range(1, steps + 1)]
+    return params, pose, target, agent, outputs
+
+
+def test_agent_detects_a_target_in_view_and_switches_to_tracking_control():
+    params, pose, target, _, outputs = hover_over_walking_target(6)
     # Births from scan 1 grow with every scan; a new target needs round(mass) >= 1 on
     # phd.confirm_scans = 2 scans in a row: tentative (round(mass) = 0, then 1) before that.
     assert [o.mode for o in outputs] == [Mode.SEARCH] * 5 + [Mode.TRACK]
@@ -168,12 +175,7 @@ def test_agent_detects_a_target_in_view_and_switches_to_tracking_control():
 
 
 def test_searching_agent_holds_its_walk_to_look_at_a_tentative_peak():
-    params = small_params()
-    pose = np.array([50.0, 50.0])
-    agent = Agent(1, params, pose, seed=4)
-    target = (lambda k: np.array([52.0 + 0.3 * k, 51.0]))
-    measurements = target_measurements(target, np.random.default_rng(0))
-    outputs = [agent.step(k, pose, measurements(k, pose), []) for k in range(1, 5)]
+    params, pose, _, agent, outputs = hover_over_walking_target(4)
     assert outputs[3].mode == Mode.SEARCH and outputs[3].estimate.tentative
     peak = outputs[3].estimate.tentative[0].position
     # The walk's next node is not where it looks: the action is the tracking control's.
