@@ -5,8 +5,10 @@ separate agent process over DDS. The agent must survive all of them, accept exac
 ones and drop exactly the invalid ones, counting every drop under its reason on /diagnostics.
 """
 
+from array import array
 import math
 import time
+import zlib
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point
@@ -16,6 +18,7 @@ import pytest
 import rclpy
 from ros_harness import executable, PARAMS, started
 
+from sat_agent.density_codec import encode_density
 from sat_msgs.msg import (AgentMode, MeasurementSet, MultiTargetEstimate, RangeBearing,
                           SearchDensity, TargetEstimate)
 
@@ -27,13 +30,17 @@ BATCHES = 50
 BATCH = 200          # 50 x 200 = 10,000 messages
 STALE_BY = 10        # older than the agent's window for late reports (MAX_REPORT_LAG)
 RADIO_DEFECTS = ('own_report', 'unknown_sender', 'future_step', 'stale_step')
-DENSITY_DEFECTS = ('nan', 'above_one', 'negative', 'wrong_length', 'grid_mismatch')
+DENSITY_DEFECTS = ('nan', 'above_one', 'negative', 'wrong_length', 'grid_mismatch', 'not_zlib',
+                   'zip_bomb')
+# 40 MB of zeros (1000 densities) in 39 kB: a decoder without a size cap would inflate it all.
+ZIP_BOMB = zlib.compress(bytes(1000 * CELLS * 4), 9)
 ESTIMATE_DEFECTS = ('nan_position', 'inf_weight', 'negative_cardinality', 'too_many_targets')
 SCAN_DEFECTS = ('wrong_agent_id', 'stale_step', 'future_step', 'nan_detection',
                 'negative_range', 'bearing', 'too_many_detections')
 # Reasons the agent counts when a message is invalid, per defect.
 REASON = {'nan': 'out_of_range', 'above_one': 'out_of_range', 'negative': 'out_of_range',
           'wrong_length': 'wrong_length', 'grid_mismatch': 'grid_mismatch',
+          'not_zlib': 'bad_encoding', 'zip_bomb': 'wrong_length',
           'nan_position': 'non_finite', 'inf_weight': 'non_finite',
           'negative_cardinality': 'out_of_range', 'too_many_targets': 'too_many_targets',
           'unknown_mode': 'unknown_mode', 'nan_detection': 'non_finite',
@@ -144,7 +151,9 @@ def density(sender, step, defect, rng):
         values[5] = -0.1
     elif defect == 'wrong_length':
         values = values[:-1]
-    msg = SearchDensity(agent_id=sender, step=step, values=values)
+    encoded = {'not_zlib': b'\x78\x9c not zlib', 'zip_bomb': ZIP_BOMB}.get(
+        defect, encode_density(values))
+    msg = SearchDensity(agent_id=sender, step=step, values_zlib=array('B', encoded))
     msg.grid.resolution = 2.0 if defect == 'grid_mismatch' else 1.0
     msg.grid.width, msg.grid.height = 100, 100
     return msg

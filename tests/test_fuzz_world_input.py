@@ -7,8 +7,10 @@ world_sim must survive, keep stepping, forward nothing invalid, and count every 
 under its reason on /diagnostics.
 """
 
+from array import array
 import math
 import time
+import zlib
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Point
@@ -18,23 +20,28 @@ import pytest
 import rclpy
 from ros_harness import executable, PARAMS, started, write_scenario
 
+from sat_agent.density_codec import encode_density
 from sat_agent.qos import RADIO, STEP
 from sat_msgs.msg import (AgentMode, ControlCommand, MeasurementSet, MultiTargetEstimate,
                           SearchDensity, TargetEstimate)
+from sat_world_sim.records import density_values
 
 pytestmark = pytest.mark.ros
 STEPS = 60            # one hypothesis example per step
 BATCH = 170           # 60 x 170 > 10,000 invalid messages
 CELLS = 100 * 100
+# 40 MB of zeros (1000 densities) in 39 kB: a decoder without a size cap would inflate it all.
+ZIP_BOMB = zlib.compress(bytes(1000 * CELLS * 4), 9)
 KINDS = {'search_density': SearchDensity, 'estimate': MultiTargetEstimate, 'mode': AgentMode}
 DEFECTS = {
     'cmd': ('wrong_agent_id', 'stale_step', 'future_step', 'duplicate'),
     'search_density': ('wrong_agent_id', 'stale_step', 'future_step', 'nan', 'wrong_length',
-                       'grid_mismatch', 'above_one'),
+                       'grid_mismatch', 'above_one', 'not_zlib', 'zip_bomb'),
     'estimate': ('wrong_agent_id', 'future_step', 'nan_position', 'negative_cardinality'),
     'mode': ('wrong_agent_id', 'stale_step', 'unknown_mode'),
 }
 REASON = {'nan': 'out_of_range', 'above_one': 'out_of_range', 'wrong_length': 'wrong_length',
+          'not_zlib': 'bad_encoding', 'zip_bomb': 'wrong_length',
           'grid_mismatch': 'grid_mismatch', 'nan_position': 'non_finite',
           'negative_cardinality': 'out_of_range', 'unknown_mode': 'unknown_mode'}
 recipe = st.tuples(st.sampled_from((1, 2)), st.sampled_from(sorted(DEFECTS))).flatmap(
@@ -51,7 +58,9 @@ def message(topic, agent, step, defect):
     if topic == 'search_density':
         values = np.zeros(CELLS - (defect == 'wrong_length'), dtype=np.float32)
         values[0] = {'nan': math.nan, 'above_one': 2.0}.get(defect, 0.0)
-        msg = SearchDensity(agent_id=sender, step=max(step, 0), values=values)
+        encoded = {'not_zlib': b'\x00 not zlib', 'zip_bomb': ZIP_BOMB}.get(
+            defect, encode_density(values))
+        msg = SearchDensity(agent_id=sender, step=max(step, 0), values_zlib=array('B', encoded))
         msg.grid.resolution = 3.0 if defect == 'grid_mismatch' else 1.0
         msg.grid.width = msg.grid.height = 100
         return msg
@@ -88,9 +97,10 @@ class ScriptedAgents:
     def on_forwarded(self, msg):
         # The radio must never forward anything: the test's valid reports carry 'mode' 0
         # and sane values, garbage would show up here with a defect.
-        if isinstance(msg, SearchDensity) and (len(msg.values) != CELLS or
-                                               not np.all(np.isfinite(msg.values))):
-            self.forwarded_bad += 1
+        if isinstance(msg, SearchDensity):
+            values = density_values(msg)
+            if values is None or values.size != CELLS or not np.all(np.isfinite(values)):
+                self.forwarded_bad += 1
 
     def on_diagnostics(self, msg):
         for status in msg.status:

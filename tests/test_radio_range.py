@@ -5,6 +5,7 @@ and separate again. Every report must reach the other agent exactly for the step
 two were within C_R = 50 m (true positions from /world/truth), and never otherwise.
 """
 
+from array import array
 import time
 
 import numpy as np
@@ -14,6 +15,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from ros_harness import executable, PARAMS, started, write_scenario
 
 from sat_agent.config import SatParams
+from sat_agent.density_codec import encode_density
 from sat_msgs.msg import (AgentMode, ControlCommand, GroundTruth, MeasurementSet,
                           MultiTargetEstimate, SearchDensity, WorldStep)
 
@@ -61,7 +63,7 @@ class ScriptedAgents:
             out = cls(agent_id=agent_id, step=msg.step)
             if kind == 'search_density':
                 out.grid.resolution, out.grid.width, out.grid.height = 1.0, 100, 100
-                out.values = np.zeros(size, dtype=np.float32)
+                out.values_zlib = array('B', encode_density(np.zeros(size)))
             self.pubs[agent_id][kind].publish(out)
         self.pubs[agent_id]['cmd'].publish(
             ControlCommand(agent_id=agent_id, step=msg.step, action_index=action))

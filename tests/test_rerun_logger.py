@@ -1,5 +1,6 @@
 """The Rerun logger: rerun_view on synthetic messages, and the logger node in a live swarm."""
 
+from array import array
 from collections import defaultdict
 import math
 import subprocess
@@ -9,6 +10,7 @@ import pytest
 from rerun.chunk import RrdReader
 from ros_harness import executable, PARAMS, REPO, started
 
+from sat_agent.density_codec import encode_density
 from sat_msgs.msg import (AgentStatus, AgentTruth, GridInfo, GroundTruth, RadioTraffic,
                           SearchDensity, TargetEstimate, TargetTruth, WorldStep)
 from sat_world_sim import rerun_view
@@ -74,7 +76,7 @@ def synthetic_step(step):
         values = [0.0] * (20 * 10)
         values[step * i] = 1.0
         densities[i] = SearchDensity(
-            agent_id=i, step=step, values=values,
+            agent_id=i, step=step, values_zlib=array('B', encode_density(values)),
             grid=GridInfo(origin_x=0.0, origin_y=0.0, resolution=5.0, width=20, height=10))
     return truth, traffic, statuses, densities
 
@@ -148,7 +150,7 @@ def test_write_rrd_takes_rosbags_deserialised_messages(tmp_path):
 
 
 def test_density_image_keeps_row_zero_at_origin_y_and_scales_to_uint8():
-    msg = SearchDensity(values=[0.0, 0.5, 1.0, 0.25, 0.0, 0.0],
+    msg = SearchDensity(values_zlib=array('B', encode_density([0.0, 0.5, 1.0, 0.25, 0.0, 0.0])),
                         grid=GridInfo(origin_x=0.0, origin_y=0.0, resolution=1.0, width=3,
                                       height=2))
     image = rerun_view.density_image(msg)

@@ -20,6 +20,7 @@ from sat_msgs.msg import AgentStatus, SearchDensity, WorldStep
 from sat_world_sim.inprocess_swarm import run_swarm as run_inprocess
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.observer import ReadyAnnouncer
+from sat_world_sim.records import density_values
 from sat_world_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.ros
@@ -57,7 +58,7 @@ class Observer:
             subscriptions.append(node.create_subscription(
                 SearchDensity, f'/agent_{i}/radio/out/search_density',
                 lambda m, i=i: self.density.__setitem__(
-                    (i, m.step), np.asarray(m.values).reshape(m.grid.height, m.grid.width)),
+                    (i, m.step), density_values(m)),
                 RELIABLE))
         # world_sim starts step 1 once this observer says it sees every topic.
         self.ready = ReadyAnnouncer(node, subscriptions)

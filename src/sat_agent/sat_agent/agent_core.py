@@ -36,12 +36,14 @@ walks of the joint plan, as in the paper).
 """
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import List, Optional, Sequence
 
 import numpy as np
 
 from sat_agent.actions import candidate_poses
 from sat_agent.config import SatParams
+from sat_agent.density_codec import encode_density
 from sat_agent.mode_machine import Mode, ModeMachine
 from sat_agent.phd_filter import SatPhdFilter
 from sat_agent.search_baselines import baseline_policy
@@ -54,9 +56,10 @@ from sat_agent.tracking_overlap import OverlapMonitor
 
 # Radio accounting: payload bytes of the three messages of a report (what the paper exchanges),
 # without DDS/RTPS overhead. Every message carries agent id and step (uint32 each); the density
-# is float32 per lattice cell; the estimate has the pose, the cardinality (float64) and per
-# target position, velocity (2 float64 each), a 4 x 4 covariance and a weight (float64); the mode
-# message has the mode (uint8) and the pose. The ROS radio counts with the same function.
+# is its zlib-compressed float32 cells (density_codec.py); the estimate has the pose, the
+# cardinality (float64) and per target position, velocity (2 float64 each), a 4 x 4 covariance
+# and a weight (float64); the mode message has the mode (uint8) and the pose. The ROS radio
+# counts with the same function.
 REPORT_KINDS = ('search_density', 'estimate', 'mode')
 _ID_STEP_BYTES = 4 + 4
 _POSE_BYTES = 2 * 8
@@ -68,9 +71,9 @@ FILTER_STREAM = 2 ** 16
 
 
 def wire_bytes(kind: str, count: int = 0) -> int:
-    """Payload bytes of one radio message: count = density cells or estimated targets."""
+    """Payload bytes of one radio message: count = encoded density bytes or estimated targets."""
     if kind == 'search_density':
-        return _ID_STEP_BYTES + 4 * count
+        return _ID_STEP_BYTES + count
     if kind == 'estimate':
         return _ID_STEP_BYTES + _POSE_BYTES + 8 + _TARGET_BYTES * count
     if kind == 'mode':
@@ -93,10 +96,15 @@ class AgentReport:
     search_values: np.ndarray
     estimate: MultiTargetEstimate
 
+    @cached_property
+    def encoded_search_values(self) -> bytes:
+        """The search density as the radio carries it (density_codec.encode_density)."""
+        return encode_density(self.search_values)
+
     @property
     def nbytes(self) -> int:
         """Payload bytes of the report's three radio messages (see wire_bytes)."""
-        return (wire_bytes('search_density', int(np.size(self.search_values)))
+        return (wire_bytes('search_density', len(self.encoded_search_values))
                 + wire_bytes('estimate', len(self.estimate.targets)) + wire_bytes('mode'))
 
     def target_positions(self) -> np.ndarray:

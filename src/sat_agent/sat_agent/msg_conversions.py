@@ -5,10 +5,13 @@ grid geometry equal to this agent's lattice, sane counts. A bad message raises I
 with a short reason (a counter key) and a detail for the log line.
 """
 
+from array import array
+
 from geometry_msgs.msg import Point, Vector3
 import numpy as np
 
 from sat_agent.agent_core import AgentReport
+from sat_agent.density_codec import decode_density, DensityDecodeError
 from sat_agent.mode_machine import Mode
 from sat_agent.search_density import Lattice
 from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
@@ -110,27 +113,26 @@ def grid_info(lattice: Lattice) -> GridInfo:
                     width=int(lattice.nx), height=int(lattice.ny))
 
 
-def density_to_msg(agent_id: int, step: int, values: np.ndarray,
-                   lattice: Lattice) -> SearchDensity:
-    """Build a SearchDensity message (values row-major, float32 on the wire)."""
+def density_to_msg(agent_id: int, step: int, encoded: bytes, lattice: Lattice) -> SearchDensity:
+    """Build a SearchDensity message from density_codec.encode_density's bytes."""
     return SearchDensity(agent_id=int(agent_id), step=int(step), grid=grid_info(lattice),
-                         values=np.asarray(values, dtype=np.float32).ravel())
+                         values_zlib=array('B', encoded))
 
 
 def density_from_msg(msg: SearchDensity, lattice: Lattice) -> np.ndarray:
-    """Return the (ny, nx) values of a validated SearchDensity on this agent's lattice."""
+    """Return the (ny, nx) float32 values of a validated SearchDensity on this agent's lattice."""
     expected = grid_info(lattice)
     if (msg.grid.width, msg.grid.height) != (expected.width, expected.height) or \
             (msg.grid.origin_x, msg.grid.origin_y, msg.grid.resolution) != \
             (expected.origin_x, expected.origin_y, expected.resolution):
         raise InvalidMessage('grid_mismatch', f'grid {msg.grid} differs from {expected}')
-    values = np.asarray(msg.values, dtype=np.float32)
-    if values.size != lattice.nx * lattice.ny:
-        raise InvalidMessage('wrong_length',
-                             f'{values.size} values for a {lattice.ny} x {lattice.nx} grid')
+    try:
+        values = decode_density(msg.values_zlib, (lattice.ny, lattice.nx))
+    except DensityDecodeError as error:
+        raise InvalidMessage(error.reason, error.detail) from None
     if not np.all(np.isfinite(values)) or values.min() < 0 or values.max() > 1:
         raise InvalidMessage('out_of_range', 'search density values outside [0, 1]')
-    return values.reshape(lattice.ny, lattice.nx)
+    return values
 
 
 # -- mode -----------------------------------------------------------------------------------
@@ -152,7 +154,8 @@ def mode_from_msg(msg: AgentMode) -> Mode:
 
 def report_to_msgs(report: AgentReport, lattice: Lattice):
     """Split a core AgentReport into the three radio messages (density, estimate, mode)."""
-    return (density_to_msg(report.agent_id, report.step, report.search_values, lattice),
+    return (density_to_msg(report.agent_id, report.step, report.encoded_search_values,
+                           lattice),
             estimate_to_msg(report.agent_id, report.step, report.pose, report.estimate),
             mode_to_msg(report.agent_id, report.step, report.pose, report.mode))
 

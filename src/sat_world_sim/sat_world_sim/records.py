@@ -12,6 +12,7 @@ from typing import List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
+from sat_agent.density_codec import decode_density, DensityDecodeError
 from sat_world_sim.metrics import compute_metrics, StepRecord, write_metrics
 from sat_world_sim.plots import write_plots
 from sat_world_sim.topics import agent_of
@@ -66,9 +67,11 @@ def step_record(truth, statuses: Mapping[int, object], traffic=None,
 
 
 def density_values(msg) -> Optional[np.ndarray]:
-    """(height, width) values of a SearchDensity message."""
-    values = np.asarray(msg.values, dtype=float)
-    return values.reshape(int(msg.grid.height), int(msg.grid.width))
+    """(height, width) float32 values of a SearchDensity message; None if they do not decode."""
+    try:
+        return decode_density(msg.values_zlib, (int(msg.grid.height), int(msg.grid.width)))
+    except DensityDecodeError:
+        return None
 
 
 def route(topic: str, agent_ids) -> Optional[Tuple[str, Optional[int]]]:
@@ -195,7 +198,8 @@ class RunCollector(StepMessages):
 
     def fused_density(self) -> Optional[np.ndarray]:
         """Elementwise max of the last search density each agent sent."""
-        values = [density_values(m) for _, m in sorted(self.densities.items())]
+        values = [v for _, m in sorted(self.densities.items())
+                  if (v := density_values(m)) is not None]
         return np.maximum.reduce(values) if values else None
 
     def write(self, run_dir, area) -> dict:

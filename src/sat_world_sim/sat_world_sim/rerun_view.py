@@ -69,7 +69,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.records import MODE_NAMES, step_record, StepMessages
+from sat_world_sim.records import density_values, MODE_NAMES, step_record, StepMessages
 
 TIMELINE = 'step'
 APPLICATION_ID = 'sat_swarm'
@@ -113,10 +113,14 @@ def _ellipse(centre, cov_xy: np.ndarray, sigmas: float = SIGMAS) -> np.ndarray:
     return np.asarray(centre) + sigmas * (circle * np.sqrt(values)) @ vectors.T
 
 
-def density_image(msg) -> np.ndarray:
-    """(height, width) uint8 of a SearchDensity message (0 = never searched, 255 = just)."""
-    values = np.asarray(msg.values, dtype=np.float32)
-    values = values.reshape(int(msg.grid.height), int(msg.grid.width))
+def density_image(msg) -> Optional[np.ndarray]:
+    """(height, width) uint8 of a SearchDensity message (0 = never searched, 255 = just).
+
+    None when its values do not decode (an observer shows what it can, it does not crash).
+    """
+    values = density_values(msg)
+    if values is None:
+        return None
     return np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
@@ -196,10 +200,6 @@ class SwarmLogger:
             series[f'plots/mode/agent_{i}'] = (f'agent {i}', agent_colour(i))
         for path, (name, colour) in series.items():
             log(path, rr.SeriesLines(names=[name], colors=[colour], widths=[2.0]), static=True)
-
-    def log_density(self, step: int, msg, path: str):
-        """Log a SearchDensity message (or an equal-shaped fused one) as a heatmap at path."""
-        self._log_density_image(step, density_image(msg), msg.grid, path)
 
     def _log_density_image(self, step: int, image: np.ndarray, grid, path: str):
         self.rec.set_time(TIMELINE, sequence=int(step))
@@ -295,6 +295,8 @@ class SwarmLogger:
         for agent_id in sorted(densities):
             msg = densities[agent_id]
             image = density_image(msg)
+            if image is None:
+                continue
             self._log_density_image(step, image, msg.grid, f'map/world/density/agent_{agent_id}')
             if grid is None or image.shape == images[0].shape:
                 images.append(image)

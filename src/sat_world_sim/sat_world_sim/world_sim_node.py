@@ -29,7 +29,6 @@ import time
 
 from ament_index_python.packages import get_package_share_directory
 from geometry_msgs.msg import Vector3
-import numpy as np
 from rclpy.node import Node
 from std_msgs.msg import String
 
@@ -270,7 +269,7 @@ class WorldSimNode(Node):
         self.guard.accept(f'radio/out/{kind}')
         self._reports[agent_id].add(kind)
         if kind == 'search_density':
-            count = np.size(part)
+            count = len(msg.values_zlib)
         else:
             count = len(part.targets) if kind == 'estimate' else 0
         self.radio.send(msg.step, agent_id, kind, msg, wire_bytes(kind, count),
