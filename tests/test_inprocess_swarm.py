@@ -4,6 +4,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sat_agent.agent_core import wire_bytes
 from sat_agent.config import load_params_file
 from sat_world_sim.inprocess_swarm import InProcessSwarm, main, run_swarm
 from sat_world_sim.metrics import compute_metrics
@@ -158,8 +159,14 @@ def test_radio_carries_reports_only_between_agents_in_range(params):
     record = swarm.step()
     # One report a step: three messages (density, estimate, mode) to the one neighbour.
     assert record.radio_messages == {1: 3, 2: 3, 3: 0}
-    # A float32 100 x 100 search density dominates the bytes.
-    assert 40_000 < record.radio_bytes[1] < 41_000 and record.radio_bytes[3] == 0
+    # The bytes are the compressed density as sent plus the estimate and mode messages.
+    report = swarm.last_outputs[1].report
+    assert record.radio_bytes[1] == report.nbytes and record.radio_bytes[3] == 0
+    assert report.nbytes - len(report.encoded_search_values) == \
+        wire_bytes('search_density', 0) + wire_bytes('estimate', len(report.estimate.targets)) \
+        + wire_bytes('mode')
+    # One square seen so far: the 40 kB float32 density shrinks below 1 kB.
+    assert len(report.encoded_search_values) < 1_000
     assert [r.agent_id for r in swarm.inbox(1)] == [2]
     assert [r.agent_id for r in swarm.inbox(2)] == [1]
     assert swarm.inbox(3) == []

@@ -37,7 +37,7 @@ from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
                                        point, report_from_parts, report_part_from_msg,
                                        report_to_msgs)
-from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.qos import RADIO, STEP
 from sat_agent.ros_params import declare_required_int, declare_sat_params
 from sat_agent.search_density import Lattice
@@ -136,7 +136,8 @@ class AgentNode(Node):
                 time.monotonic() - self._last_scan_at > self.world_timeout:
             self.get_logger().warning(f'no scan for {self.world_timeout} s: world_sim is gone, '
                                       'exiting')
-            raise RunFinished(0)
+            finish_run(self, 0)
+            return
         if self._pending and time.monotonic() - self._pending[3] > self.report_wait_timeout:
             self.get_logger().warning(
                 f'step {self._pending[0]}: radio messages missing after '

@@ -1,13 +1,39 @@
-"""The one way every sat-swarm node process starts, spins and stops (ros2/demos idiom)."""
+"""The one way every sat-swarm node process starts, spins and stops (ros2/demos idiom).
+
+The executor is rclpy's EventsExecutor where the installed rclpy has it (Jazzy >= 7.1.4): it
+hands each arriving message to its callback directly, whereas the SingleThreadedExecutor
+rebuilds its wait set in Python before every callback, a cost that grows with the number of
+topics a process serves. world_sim and the recorder serve a few topics per agent and take one
+callback per radio message, so with 16 agents the waits cost more CPU than the work. Older
+rclpy falls back to the SingleThreadedExecutor.
+"""
 
 import sys
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
+try:
+    from rclpy.experimental import EventsExecutor as FastExecutor
+except ImportError:
+    FastExecutor = SingleThreadedExecutor
 
-class RunFinished(SystemExit):
-    """Raised from a callback when a node's work is done; the process exits with ``code``."""
+# How long one spin waits for work before the loop looks at rclpy.ok() and finish requests.
+SPIN_TIMEOUT_S = 0.1
+
+
+def finish_run(node, code: int = 0):
+    """Ask run_nodes to stop spinning once the current callback returns, then exit with code.
+
+    A flag, not an exception: the EventsExecutor logs every exception that leaves a callback as
+    FATAL, and a node that is done is not an error.
+    """
+    node.sat_exit_code = int(code)
+
+
+def _exit_code(nodes):
+    return next((n.sat_exit_code for n in nodes if getattr(n, 'sat_exit_code', None) is not None),
+                None)
 
 
 def run_nodes(name: str, factory, args=None) -> int:
@@ -15,12 +41,12 @@ def run_nodes(name: str, factory, args=None) -> int:
 
     Ctrl-C and external shutdown end cleanly with 0; a ValueError or OSError while building the
     nodes (bad parameters, a missing or malformed scenario or YAML file) is printed as one line
-    naming the problem and gives 2; RunFinished from a callback ends the spin with its code.
+    naming the problem and gives 2; finish_run from a callback ends the spin with its code.
     Any other error is a bug and propagates with its traceback.
     """
     rclpy.init(args=args)
     nodes = []
-    code = 0
+    code = None
     try:
         try:
             made = factory()
@@ -28,16 +54,18 @@ def run_nodes(name: str, factory, args=None) -> int:
             print(f'{name}: {error}', file=sys.stderr, flush=True)
             return 2
         nodes = list(made) if isinstance(made, (list, tuple)) else [made]
-        executor = SingleThreadedExecutor()
+        executor = FastExecutor()
         for node in nodes:
             executor.add_node(node)
-        executor.spin()
+        # spin_once in a loop rather than spin(): EventsExecutor.spin() of rclpy 7.1.5 never
+        # runs a callback, and the loop is where finish requests are seen.
+        while code is None and rclpy.ok():
+            executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
+            code = _exit_code(nodes)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
-    except RunFinished as done:
-        code = done.code or 0
     finally:
         for node in nodes:
             node.destroy_node()
         rclpy.try_shutdown()
-    return code
+    return code or 0

@@ -30,7 +30,7 @@ import urllib.parse
 from rclpy.node import Node
 import rerun as rr
 
-from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.ros_params import declare_sat_params
 
 from sat_world_sim import rerun_view
@@ -105,7 +105,7 @@ class LoggerNode(Node):
             return
         self.buffer.log_rest()
         self.finish()
-        raise RunFinished(0)
+        finish_run(self, 0)
 
     def finish(self):
         """Flush the recording to its sinks and close them (once)."""

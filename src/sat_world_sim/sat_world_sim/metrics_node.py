@@ -12,7 +12,7 @@ import time
 
 from rclpy.node import Node
 
-from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.ros_params import declare_sat_params
 
 from sat_world_sim.observer import declare_run, watch_run
@@ -46,7 +46,7 @@ class MetricsNode(Node):
         metrics = self.collector.write(self.run_dir, area)
         self.get_logger().info(
             f"wrote {self.run_dir / 'metrics.json'} ({len(metrics['steps'])} steps)")
-        raise RunFinished(0)
+        finish_run(self, 0)
 
 
 def main(args=None):

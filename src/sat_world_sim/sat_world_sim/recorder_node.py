@@ -18,7 +18,7 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
-from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.node_runner import finish_run, run_nodes
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
@@ -79,7 +79,7 @@ class RecorderNode(Node):
     def _tick(self):
         if self._finished_at is not None and time.monotonic() - self._finished_at > FINAL_WAIT_S:
             self.get_logger().info(f'wrote {self.count} messages to {self.path}')
-            raise RunFinished(0)
+            finish_run(self, 0)
 
     def destroy_node(self):
         """Close the bag (metadata.yaml is written on close) whatever ended the node."""

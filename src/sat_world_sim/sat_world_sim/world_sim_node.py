@@ -36,7 +36,7 @@ from sat_agent.agent_core import REPORT_KINDS, wire_bytes
 from sat_agent.input_guard import InputGuard
 from sat_agent.msg_conversions import (InvalidMessage, measurements_to_msg, point,
                                        report_part_from_msg)
-from sat_agent.node_runner import run_nodes, RunFinished
+from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.qos import RADIO, STEP, WORLD
 from sat_agent.ros_params import declare_sat_params
 from sat_agent.search_density import Lattice
@@ -153,7 +153,7 @@ class WorldSimNode(Node):
         if self._finished_at is not None:
             # Give the last messages time to leave before the process exits.
             if now - self._finished_at > 1.0:
-                raise RunFinished(0)
+                finish_run(self, 0)
             return
         if not self._started:
             self._start_when_ready(now)
@@ -203,7 +203,15 @@ class WorldSimNode(Node):
                 i, k, poses[i], scan.measurements, delivered[i] if lock_step else 0))
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
-        self._deadline = time.monotonic() + (self.agent_timeout if lock_step else self.period)
+        now = time.monotonic()
+        if lock_step:
+            self._deadline = now + self.agent_timeout
+        else:
+            # A fixed schedule, step k ending at start + k T: timing from now would stretch
+            # every period by the time publishing took. A world that fell a whole period
+            # behind restarts the schedule instead of rushing steps to catch up.
+            scheduled = (self._deadline or now) + self.period
+            self._deadline = scheduled if scheduled > now else now + self.period
 
     def _maybe_finish(self):
         if self.clock == 'lock_step' and self.active and all(map(self._answered, self.active)):
