@@ -11,8 +11,8 @@
 
 Run from the repository after `make test` (the workspace must be built)::
 
-    scripts/with_env.sh python scripts/bench_swarm.py [--json] [--sizes 4 8 16] \
-        [--composed 16 32 64]
+    scripts/with_env.sh python scripts/bench_swarm.py [--json] [--sizes 4 8 16 24 32] \
+        [--composed 16 24 32 48 64]
 
 With --json the last line is a JSON object with every figure.
 """
@@ -99,9 +99,9 @@ def largest(results) -> int:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--json', action='store_true', help='last line: JSON of all figures')
-    parser.add_argument('--sizes', type=int, nargs='*', default=[4, 8, 16],
+    parser.add_argument('--sizes', type=int, nargs='*', default=[4, 8, 16, 24, 32],
                         help='swarm sizes to try as separate processes (ascending)')
-    parser.add_argument('--composed', type=int, nargs='*', default=[16, 32, 64],
+    parser.add_argument('--composed', type=int, nargs='*', default=[16, 24, 32, 48, 64],
                         help='swarm sizes to try composed in one process (ascending)')
     parser.add_argument('--rt-steps', type=int, default=20, help='real-time steps per size')
     args = parser.parse_args()
