@@ -102,51 +102,51 @@ def extract_targets(phd: ParticlePHD, pose, params: SatParams,
     side = params.sensor.square_side + 2.0 * phd_params.extraction_margin
     points = motion_model.positions(phd.states)
     region = sensor_model.in_sensing_square(points, pose, side)
+    mass = float(phd.weights[region].sum())
+    # The unclaimed particles: claimed regions are cut out, so later peaks scan fewer rows.
+    region &= phd.weights > 0.0
     states, points, weights = phd.states[region], points[region], phd.weights[region]
-    mass = float(weights.sum())
     origin = np.asarray(pose, dtype=float) - side / 2.0
-    unclaimed = weights > 0.0
     estimates: List[TargetEstimate] = []
     # Track continuity first: each target of k-1 looks for its peak from where it should be.
     for guess in np.zeros((0, 2)) if previous is None else np.asarray(
             previous, dtype=float).reshape(-1, 2):
-        peak = _mean_shift(points, weights, unclaimed, guess, radius)
-        member = unclaimed & (np.hypot(*(points - peak).T) < radius)
+        peak = _mean_shift(points, weights, guess, radius)
+        member = np.hypot(*(points - peak).T) < radius
         peak_mass = weights[member].sum()
         if (np.hypot(*(peak - guess)) > phd_params.continue_gate
                 or peak_mass < phd_params.continue_threshold):
             continue
-        unclaimed &= ~member
         # The PHD over-counts a tracked target under clutter (clutter points next to it add
         # mass): a continued target splits in two only at a mass of 2, not 1.5.
         estimates.extend(_estimates(states[member], points[member], weights[member], peak,
                                     max(1, int(np.floor(peak_mass)))))
+        states, points, weights = states[~member], points[~member], weights[~member]
     # New targets: round(mass) >= 1 around a peak inside the square; lighter peaks there with
     # at least tentative_threshold are kept as tentative.
     floor = min(0.5, phd_params.tentative_threshold)
     tentative: List[TargetEstimate] = []
     streaks: List[int] = []
     for _ in range(MAX_PEAKS):
-        if weights[unclaimed].sum() < floor:
+        if weights.sum() < floor:
             break
-        peak = _mean_shift(points, weights, unclaimed,
-                           _densest_cell(points[unclaimed], weights[unclaimed], origin, side),
+        peak = _mean_shift(points, weights, _densest_cell(points, weights, origin, side),
                            radius)
-        member = unclaimed & (np.hypot(*(points - peak).T) < radius)
-        unclaimed &= ~member
+        member = np.hypot(*(points - peak).T) < radius
         peak_mass = weights[member].sum()
-        seen = sensor_model.in_sensing_square(points[member], pose, params.sensor.square_side)
-        if weights[member][seen].sum() < 0.5 * peak_mass:
+        claimed = states[member], points[member], weights[member]
+        states, points, weights = states[~member], points[~member], weights[~member]
+        seen = sensor_model.in_sensing_square(claimed[1], pose, params.sensor.square_side)
+        if claimed[2][seen].sum() < 0.5 * peak_mass:
             # Mass beyond the square (no p_D there, Eqn. sensing_model) is never corrected and
             # only decays with p_S: it can continue a target but not make a new one.
             continue
         count = int(np.floor(peak_mass + 0.5))
         streak = _streak(peak, candidates, phd_params.confirm_gate) if count >= 1 else 0
         if count >= 1 and (candidates is None or streak >= phd_params.confirm_scans):
-            estimates.extend(_estimates(states[member], points[member], weights[member], peak,
-                                        count))
+            estimates.extend(_estimates(*claimed, peak, count))
         elif peak_mass >= phd_params.tentative_threshold:
-            tentative.append(_summarise(states[member], weights[member], peak))
+            tentative.append(_summarise(claimed[0], claimed[2], peak))
             streaks.append(streak)
     return MultiTargetEstimate(tuple(estimates), mass, tuple(tentative), tuple(streaks))
 
@@ -180,11 +180,11 @@ def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,
     return origin + (np.array([col, row]) + 0.5) * PEAK_CELL
 
 
-def _mean_shift(points: np.ndarray, weights: np.ndarray, active: np.ndarray,
-                center: np.ndarray, radius: float) -> np.ndarray:
-    """Move center to the weighted mean of the active particles within radius, repeatedly."""
+def _mean_shift(points: np.ndarray, weights: np.ndarray, center: np.ndarray,
+                radius: float) -> np.ndarray:
+    """Move center to the weighted mean of the particles within radius, repeatedly."""
     for _ in range(MEAN_SHIFT_STEPS):
-        near = active & (np.hypot(*(points - center).T) < radius)
+        near = np.hypot(*(points - center).T) < radius
         total = weights[near].sum()
         if total <= 0.0:
             break
