@@ -13,7 +13,10 @@ Clocks (parameter ``clock``):
 
 - ``lock_step``: step k+1 starts as soon as every active agent has sent its command and its
   three reports for step k. Deterministic for a seed, as fast as the CPUs allow.
-- ``real_time``: a step every ``period`` seconds; agents that are late hold position.
+- ``real_time``: a step every ``period`` seconds on a fixed schedule; agents that are late
+  hold position. Agents step on their scan without waiting for their inbox, so with no radio
+  delay each report is forwarded as soon as it arrives (read by the receiver's next step, as
+  in lock-step) instead of in one burst with the next step's scans.
 
 An agent that stays silent for ``agent_timeout`` seconds (lock-step) is marked inactive: it holds
 position and is not waited for until it speaks again. Commands that are not one of the actions
