@@ -57,14 +57,14 @@ class InProcessSwarm:
         self.agents: Dict[int, Agent] = {
             a.agent_id: Agent(a.agent_id, params, a.start, seed=scenario.seed)
             for a in scenario.agents}
-        self._outbox: Dict[int, AgentReport] = {}
         self._links = frozenset()
-        # Each agent's output of the last step (estimates with tentative peaks, plans, ...).
+        # Each agent's output of the last step: its report is what the radio carries to the
+        # agents in range, and tools read its estimate (with tentative peaks) and plan.
         self.last_outputs: Dict[int, AgentOutput] = {}
 
     def inbox(self, agent_id: int) -> List[AgentReport]:
         """Return the reports of step k-1 from the agents within C_R of agent_id at step k-1."""
-        return [report for sender, report in sorted(self._outbox.items())
+        return [output.report for sender, output in sorted(self.last_outputs.items())
                 if tuple(sorted((sender, agent_id))) in self._links]
 
     def step(self) -> StepRecord:
@@ -81,7 +81,6 @@ class InProcessSwarm:
         links = self.world.links()
         moves = self.world.apply_actions({a: o.action for a, o in outputs.items()})
         self.world.advance()
-        self._outbox = {a: o.report for a, o in outputs.items()}
         self.last_outputs = outputs
         self._links = links
         receivers = {a: sum(1 for pair in links if a in pair) for a in outputs}
