@@ -144,8 +144,7 @@ def random_scenario(seed: int, agents: int, steps: int, width: float = 100.0,
 def scenario_for(cell: Cell, seed: int, base: SatParams, paper: Scenario) -> Scenario:
     """Return the cell's scenario for one seed (paper: the paper's scenario, read once)."""
     if cell.setting == 'paper':
-        return Scenario(paper.name, int(seed), cell.steps, paper.truth_process_noise,
-                        paper.agents, paper.targets, paper.random_births)
+        return replace(paper.with_seed(seed), steps=cell.steps)
     return random_scenario(seed, cell.agents, cell.steps, base.area.width, base.area.height)
 
 
