@@ -194,6 +194,7 @@ def test_a_random_birth_baseline_swarm_gives_the_in_process_metrics(tmp_path):
         targets=[{'id': 1, 'born': 1, 'died': 40, 'start': [45.0, 50.0], 'end': [55.0, 50.0]}])
     params = tmp_path / 'random_walk.yaml'
     params.write_text(PARAMS.read_text().replace('policy: sat', 'policy: random_walk'))
+    assert load_params_file(params).search.policy == 'random_walk'
     code, metrics, output = run_swarm(tmp_path / 'run', scenario, '--no-record', '--no-view',
                                       params=params)
     assert code == 0, output[-3000:]
