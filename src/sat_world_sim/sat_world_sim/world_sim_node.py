@@ -241,15 +241,21 @@ class WorldSimNode(Node):
             self.guard.drop('wrong_agent_id',
                             f'{what} on /agent_{agent_id} claims agent_id {msg.agent_id}')
             return False
-        if not self._started or self._finished_at is not None or msg.step < self.world.step:
+        if not self._started or self._finished_at is not None:
             self.guard.drop('stale_step', f'{what} of step {msg.step} at {self.world.step}')
             return False
         if msg.step > self.world.step:
             self.guard.drop('future_step', f'{what} of step {msg.step} at {self.world.step}')
             return False
-        if agent_id not in self.active:
+        # An answer to the previous scan is enough to rejoin: the world does not wait for an
+        # inactive agent, so it is usually a step ahead by the time the agent answers, and
+        # requiring the current step would leave a restarted agent inactive for good.
+        if agent_id not in self.active and msg.step >= self.world.step - 1:
             self.get_logger().info(f'agent {agent_id} speaks again: active')
             self.active.add(agent_id)
+        if msg.step < self.world.step:
+            self.guard.drop('stale_step', f'{what} of step {msg.step} at {self.world.step}')
+            return False
         return True
 
     def on_cmd(self, agent_id: int, msg: ControlCommand):
