@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""What limits tracking under the paper's clutter: the figures of README "Status and known limits".
+"""What limits tracking under dense clutter: the figures of README "Clutter".
 
 Three in-process measurements (no ROS), each for the filter's Q scales given by --q-scales:
 
@@ -14,7 +14,8 @@ Three in-process measurements (no ROS), each for the filter's Q scales given by 
    scan's predicted peak), and on what share of the scans such a peak appears away from every
    target (clutter).
 
-    scripts/with_env.sh python scripts/tracking_limits.py [--q-scales 1 0.02] [--blocks 0 20 30]
+    scripts/with_env.sh python scripts/tracking_limits.py [--params config/dense_clutter.yaml]
+        [--q-scales 1 0.02] [--blocks 0 20 30]
 """
 
 import argparse
@@ -113,6 +114,8 @@ def trigger_rates(params: SatParams, seeds: int, steps: int = 30) -> dict:
 def main(argv=None) -> int:
     """Command-line entry point (module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--params', type=Path, default=ROOT / 'config' / 'dense_clutter.yaml',
+                        help='parameter file (default: the dense reading of the clutter)')
     parser.add_argument('--q-scales', type=float, nargs='+', default=[1.0, 0.02],
                         help='filter Q scales (motion.process_noise) to compare')
     parser.add_argument('--blocks', type=int, nargs='+', default=[0, 20, 30],
@@ -120,7 +123,7 @@ def main(argv=None) -> int:
     parser.add_argument('--hover-seeds', type=int, default=20)
     parser.add_argument('--trigger-seeds', type=int, default=12)
     args = parser.parse_args(argv)
-    base = load_params_file(ROOT / 'config' / 'paper.yaml')
+    base = load_params_file(args.params)
     for scale in args.q_scales:
         params = base.with_overrides({'motion': {'process_noise': scale}})
         print(f'Q scale {scale:g}')

@@ -18,9 +18,11 @@ def small_params():
     # Small particle budgets: these tests are about the agent's bookkeeping, not the filter. The
     # filter's process noise matches the scripted, near-constant-velocity targets below (with the
     # paper's Q a target within ~4 m of the agent cannot hold PHD mass 0.5 against the clutter
-    # intensity, see the helper report).
+    # intensity, see the helper report). The dense reading of the clutter (config/
+    # dense_clutter.yaml) keeps confirmation, tentative peaks and looks closer in play.
     return SatParams().with_overrides({
         'motion.process_noise': 0.1,
+        'sensor.clutter_max_range': 0.0, 'phd.birth_mass_measurement': 0.12,
         'phd.birth_particles_uniform': 200, 'phd.birth_particles_per_measurement': 30,
         'phd.particles_per_target': 300, 'phd.min_particles': 200, 'phd.max_particles': 2000})
 

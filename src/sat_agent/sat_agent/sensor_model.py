@@ -5,8 +5,13 @@ The sensing area S_a(s) is the closed a x a square centred on the agent; p_D is 
 z = h(x, s) + v with h = [range, bearing] and range-dependent standard deviations.
 Bearing is atan2(y - s_y, x - s_x), the direction of the target seen from the agent (the paper's
 arctan((s_y - y)/(s_x - x)) is the same line, made unambiguous). Clutter is Poisson with mean
-lambda and uniform over the measurement space [0, r_max] x [-pi, pi), r_max the square's half
-diagonal, so kappa(z) = lambda / (2 pi r_max).
+lambda and uniform over the measurement space [0, r_c] x [-pi, pi), so kappa(z) = lambda / (2 pi
+r_c). The paper's measurement space Z is that of h over the surveillance area, so r_c
+(``sensor.clutter_max_range``) is the area's diagonal by default and most false alarms fall
+beyond the square, where no target can be detected (they cost the filter nothing: no particle
+with p_D > 0 explains them, and births come only from measurements inside the square).
+clutter_max_range = 0 puts all of them within the square's half diagonal r_max (the dense
+reading, config/dense_clutter.yaml).
 """
 
 import math
@@ -88,8 +93,8 @@ def likelihood(measurements: np.ndarray, points: np.ndarray, pose,
 
 
 def clutter_intensity(sensor: SensorParams) -> float:
-    """kappa(z) = lambda f_c(z), f_c uniform over [0, r_max] x [-pi, pi)."""
-    return sensor.clutter_rate / (2.0 * math.pi * sensor.max_range)
+    """kappa(z) = lambda f_c(z), f_c uniform over [0, r_c] x [-pi, pi)."""
+    return sensor.clutter_rate / (2.0 * math.pi * sensor.clutter_range)
 
 
 def to_position(measurements: np.ndarray, pose) -> np.ndarray:
@@ -115,7 +120,7 @@ def simulate_scan(target_points: np.ndarray, pose, sensor: SensorParams,
     noisy[:, 0] = np.abs(noisy[:, 0])
     noisy[:, 1] = wrap_angle(noisy[:, 1])
     n_clutter = rng.poisson(sensor.clutter_rate)
-    clutter = np.column_stack([rng.uniform(0.0, sensor.max_range, n_clutter),
+    clutter = np.column_stack([rng.uniform(0.0, sensor.clutter_range, n_clutter),
                                rng.uniform(-math.pi, math.pi, n_clutter)])
     z = np.vstack([noisy, clutter])
     source = np.concatenate([detected, np.full(n_clutter, -1)])
