@@ -4,7 +4,7 @@ import pytest
 
 from sat_agent.actions import candidate_poses, inside_area
 from sat_agent.config import AreaParams, SatParams
-from sat_agent.search_map import SearchMap
+from sat_agent.search_map import nodes_in_view, SearchMap
 from sat_agent.search_planning import (
     greedy_closed_walk, joint_plan, ReplanReason, search_action, SearchPlanner, walk_cost)
 
@@ -264,11 +264,13 @@ def test_exhaustion_replan_is_solo_and_leaves_the_other_members_claims_alone():
     searched[own] = 1.0
     planner.mark_visited((10.0, 60.0), searched)
     assert planner.needs_replan(frozenset({1, 2}), False) == ReplanReason.EXHAUSTED
-    # Three of its own nodes decayed below beta again; agent 2 has not searched its share.
+    # Three of its own nodes decayed below beta again; agent 2 has not searched its share. The
+    # nodes in view of the new start are being searched and are not planned again.
+    in_view = set(nodes_in_view(MAP, (30.0, 30.0), PARAMS.sensor.square_side).tolist())
     decayed = fresh_values()
     decayed[own[3:]] = 1.0
     planner.plan(1, {1: (30.0, 30.0), 2: (60.0, 10.0)}, decayed)
-    assert sorted(planner.walk) == sorted(own[:3])
+    assert planner.walk and sorted(planner.walk) == sorted(set(own[:3]) - in_view)
     assert planner.group == frozenset({1, 2})
     assert not planner.needs_replan(frozenset({1, 2}), False)
     # Once nothing unclaimed is left, it helps with the claimed (still unvisited) nodes.
@@ -278,7 +280,26 @@ def test_exhaustion_replan_is_solo_and_leaves_the_other_members_claims_alone():
     remaining = fresh_values()
     remaining[own] = 1.0
     planner.plan(1, {1: (30.0, 30.0)}, remaining)
-    assert sorted(planner.walk) == others
+    assert sorted(planner.walk) == sorted(set(others) - in_view)
+
+
+def test_an_agent_short_of_a_nodes_far_edge_does_not_replan_that_node_forever():
+    # The last node's centre came into view 4.8 m away, so the strip beyond the square's edge
+    # keeps the node's search value below beta (paper scenario, agent 2 from k = 143). Planning
+    # it again gave a walk visited at once: the agent replanned it at every step and hovered.
+    planner = planned(1, {1: (80.0, 95.0)})
+    corner = int(np.flatnonzero(np.all(MAP.centers == (95.0, 95.0), axis=1))[0])
+    values = np.ones(MAP.size)
+    values[corner] = 0.4
+    values[0] = 0.2                                   # the node at (5, 5) is due again
+    planner.plan(1, {1: (80.0, 95.0)}, values)
+    assert planner.walk == (0, corner) or planner.walk == (corner, 0)
+    planner.mark_visited((90.2, 94.4), values)
+    assert planner.walk == (0,)
+    planner.mark_visited((5.0, 5.0), values)
+    assert planner.needs_replan(frozenset({1}), False) == ReplanReason.EXHAUSTED
+    planner.plan(1, {1: (90.2, 94.4)}, values)
+    assert corner not in planner.walk and planner.walk
 
 
 def test_replan_priority_and_bad_input():

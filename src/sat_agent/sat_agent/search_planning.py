@@ -29,7 +29,7 @@ import numpy as np
 
 from sat_agent.actions import admissible_mask, candidate_poses
 from sat_agent.config import SatParams
-from sat_agent.search_map import nodes_to_search, SearchMap
+from sat_agent.search_map import nodes_in_view, nodes_to_search, SearchMap
 from sat_agent.sensor_model import in_sensing_square
 
 # Costs are compared after rounding to this many decimals (1e-9 m): far below any distance
@@ -250,8 +250,14 @@ class SearchPlanner:
         if values.size != self._map.size:
             raise ValueError(f'{values.size} search values for {self._map.size} nodes')
         search = self._params.search
-        nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
         own_start = _point(starts[own_id])
+        if self._reason == ReplanReason.EXHAUSTED:
+            # The nodes in view are being searched now: planning them again would give a walk
+            # that is visited at once, and an agent short of a node's far edge would replan
+            # that same node at every step and never move.
+            values = values.copy()
+            values[nodes_in_view(self._map, own_start, self._params.sensor.square_side)] = 1.0
+        nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
         if self._reason == ReplanReason.EXHAUSTED:
             self._plan_alone(own_id, own_start, nodes)
         else:
