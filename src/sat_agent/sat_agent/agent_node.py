@@ -8,7 +8,8 @@ Run one per agent in its own namespace::
 Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
 
 - ``measurements`` (sub, MeasurementSet, STEP);
-- ``radio/in/{search_density,estimate,mode}`` (sub, RADIO);
+- ``radio/in/{search_density,estimate,mode}`` (sub, RADIO, raw bytes parsed by
+  sat_agent.radio_parsing, once per process in composed mode);
 - ``cmd`` (pub, ControlCommand, STEP), ``radio/out/*`` (pub, RADIO);
 - ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder.
 
@@ -25,6 +26,7 @@ warning and counted per reason, and the counters go to ``/diagnostics`` every se
 import argparse
 import sys
 import time
+from typing import Optional
 
 import numpy as np
 from rclpy.node import Node
@@ -35,16 +37,14 @@ from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
-                                       point, report_from_parts, report_part_from_msg,
-                                       report_to_msgs)
+                                       point, RADIO_TYPES, report_from_parts, report_to_msgs)
 from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.qos import RADIO, STEP
+from sat_agent.radio_parsing import RadioParser
 from sat_agent.ros_params import declare_required_int, declare_sat_params
 from sat_agent.search_density import Lattice
-from sat_msgs.msg import (AgentMode, AgentStatus, ControlCommand, MeasurementSet,
-                          MultiTargetEstimate, SearchDensity)
+from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet
 
-RADIO_KINDS = tuple(zip(REPORT_KINDS, (SearchDensity, MultiTargetEstimate, AgentMode)))
 # Particles shown to the logger per step: enough to see the cloud, small on the wire.
 STATUS_PARTICLES = 300
 # A scan further ahead than this is garbage, not a world that ran on without us.
@@ -52,13 +52,20 @@ MAX_STEP_JUMP = 1000
 # Reports older than this many steps are stale; younger late ones (radio latency) still add
 # their search density (Agent.step).
 MAX_REPORT_LAG = 4
+# Composed mode: parsed radio messages kept per agent of the process, two steps' worth of its
+# three messages (radio_parsing.py).
+PARSED_PER_AGENT = 2 * len(REPORT_KINDS)
 
 
 class AgentNode(Node):
-    """Validates input, steps the core Agent, publishes its command, reports and status."""
+    """Validates input, steps the core Agent, publishes its command, reports and status.
 
-    def __init__(self, **kwargs):
+    radio_parser: shared by the agents of one process in composed mode (radio_parsing.py).
+    """
+
+    def __init__(self, radio_parser: Optional[RadioParser] = None, **kwargs):
         super().__init__('agent', **kwargs)
+        self.radio_parser = radio_parser or RadioParser()
         self.params = declare_sat_params(self)
         self.agent_id = declare_required_int(self, 'agent_id', 1, 'this agent id (>= 1)')
         self.seed = self.declare_parameter('seed', 0).value
@@ -78,11 +85,12 @@ class AgentNode(Node):
         self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP)
         self.status_pub = self.create_publisher(AgentStatus, 'status', STEP)
         self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO)
-                           for kind, cls in RADIO_KINDS}
+                           for kind, cls in RADIO_TYPES.items()}
         self.create_subscription(MeasurementSet, 'measurements', self.on_measurements, STEP)
-        for kind, cls in RADIO_KINDS:
+        for kind, cls in RADIO_TYPES.items():
             self.create_subscription(cls, f'radio/in/{kind}',
-                                     lambda msg, kind=kind: self.on_radio(kind, msg), RADIO)
+                                     lambda data, kind=kind: self.on_radio(kind, data), RADIO,
+                                     raw=True)
         self.create_timer(0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
 
@@ -111,7 +119,11 @@ class AgentNode(Node):
         self._pending = (msg.step, scan, msg.radio_deliveries, time.monotonic())
         self._try_step()
 
-    def on_radio(self, kind: str, msg):
+    def on_radio(self, kind: str, data: bytes):
+        msg, part = self.radio_parser.parse(kind, data, self.lattice)
+        if msg is None:
+            self.guard.drop(part.reason, f'{kind}: {part.detail}')
+            return
         if msg.agent_id == self.agent_id:
             self.guard.drop('own_report', f'{kind} from this agent came back')
             return
@@ -121,10 +133,8 @@ class AgentNode(Node):
         if msg.step > self.last_step + 1:
             self.guard.drop('future_step', f'{kind} of step {msg.step} at step {self.last_step}')
             return
-        try:
-            part = report_part_from_msg(kind, msg, self.lattice)
-        except InvalidMessage as error:
-            self.guard.drop(error.reason, f'{kind} of agent {msg.agent_id}: {error.detail}')
+        if isinstance(part, InvalidMessage):
+            self.guard.drop(part.reason, f'{kind} of agent {msg.agent_id}: {part.detail}')
             return
         self.guard.accept(f'radio/in/{kind}')
         self._received_since_step += 1
@@ -212,7 +222,8 @@ def main_composed(args=None):
     parser = argparse.ArgumentParser(prog='agents_composed', description=main_composed.__doc__)
     parser.add_argument('--ids', type=int, nargs='+', required=True, help='agent ids (>= 1)')
     ids = parser.parse_args(argv[1:]).ids
+    shared = RadioParser(max_entries=PARSED_PER_AGENT * len(ids))
     return run_nodes('agents_composed', lambda: [
-        AgentNode(namespace=f'/agent_{i}',
+        AgentNode(radio_parser=shared, namespace=f'/agent_{i}',
                   parameter_overrides=[Parameter('agent_id', Parameter.Type.INTEGER, i)])
         for i in ids], args)

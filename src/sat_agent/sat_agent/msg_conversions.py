@@ -10,7 +10,7 @@ from array import array
 from geometry_msgs.msg import Point, Vector3
 import numpy as np
 
-from sat_agent.agent_core import AgentReport
+from sat_agent.agent_core import AgentReport, REPORT_KINDS
 from sat_agent.density_codec import decode_density, DensityDecodeError
 from sat_agent.mode_machine import Mode
 from sat_agent.search_density import Lattice
@@ -21,6 +21,8 @@ from sat_msgs.msg import (AgentMode, GridInfo, MeasurementSet, MultiTargetEstima
 # Far more than a square of side a can hold (lambda = 10 clutter + targets); guards memory.
 MAX_DETECTIONS = 10000
 MAX_TARGETS = 1000
+# The message type of each radio topic, radio/{out,in}/<kind>.
+RADIO_TYPES = dict(zip(REPORT_KINDS, (SearchDensity, EstimateMsg, AgentMode)))
 
 
 class InvalidMessage(ValueError):
