@@ -8,11 +8,14 @@
    spread over the area (a random-births scenario), run ``--rt-steps`` steps; a size passes when
    the world counted no command that missed its step (``late_commands`` in metrics.json). Also
    prints messages and bytes each agent sent per step (radio payload, counted per receiver).
+   The recorder, the Rerun logger and the metrics run too. Composed sizes are tried once more
+   without the recorder and the logger (``--bare``): their load grows with the radio traffic,
+   as the square of the swarm's size, and on 2 cores it is what stops the largest swarms.
 
 Run from the repository after `make test` (the workspace must be built)::
 
     scripts/with_env.sh python scripts/bench_swarm.py [--json] [--sizes 4 8 16 24 32] \
-        [--composed 16 24 32 48 64]
+        [--composed 16 24 32 48 64] [--bare 48 64]
 
 With --json the last line is a JSON object with every figure.
 """
@@ -65,23 +68,30 @@ def per_agent_step(metrics: dict) -> tuple:
             sum(r['bytes'] for r in radio) / agents / steps)
 
 
-def real_time_sizes(sizes, composed: bool, steps: int, work: Path) -> list:
-    """Try each swarm size at 1 Hz; return one result dict per size."""
+def real_time_sizes(sizes, composed: bool, steps: int, work: Path,
+                    observers: bool = True) -> list:
+    """Try each swarm size at 1 Hz; return one result dict per size.
+
+    observers=False runs without the recorder and the Rerun logger (metrics still run).
+    """
     results = []
+    label = ('composed' if composed else 'processes') + ('' if observers else ', bare')
     for size in sizes:
         scenario = spread_scenario(work / f'rt_{size}.yaml', size, steps)
         extra = ['--clock', 'real_time', '--period', '1.0', '--timeout', str(steps * 3 + 180)]
         if composed:
             extra.append('--composed')
-        code, wall, metrics = run(scenario, work / f'rt_{"c" if composed else "p"}_{size}',
-                                  *extra)
+        if not observers:
+            extra += ['--no-record', '--no-view']
+        name = f'rt_{"c" if composed else "p"}{"" if observers else "b"}_{size}'
+        code, wall, metrics = run(scenario, work / name, *extra)
         late = metrics['late_commands'] if metrics else None
         messages, nbytes = per_agent_step(metrics) if metrics else (None, None)
         ok = code == 0 and late == 0
-        results.append({'agents': size, 'composed': composed, 'ok': ok, 'late_commands': late,
-                        'wall_s': round(wall, 1), 'msgs_per_agent_step': messages,
-                        'bytes_per_agent_step': nbytes})
-        print(f"{'composed' if composed else 'processes'} {size:3d} agents: "
+        results.append({'agents': size, 'composed': composed, 'observers': observers, 'ok': ok,
+                        'late_commands': late, 'wall_s': round(wall, 1),
+                        'msgs_per_agent_step': messages, 'bytes_per_agent_step': nbytes})
+        print(f'{label} {size:3d} agents: '
               f"{'ok' if ok else 'OVERRUN'} (late commands {late}, exit {code}), "
               f'{messages if messages is None else round(messages, 1)} msgs and '
               f'{nbytes if nbytes is None else round(nbytes)} B per agent per step',
@@ -103,6 +113,8 @@ def main() -> int:
                         help='swarm sizes to try as separate processes (ascending)')
     parser.add_argument('--composed', type=int, nargs='*', default=[16, 24, 32, 48, 64],
                         help='swarm sizes to try composed in one process (ascending)')
+    parser.add_argument('--bare', type=int, nargs='*', default=[48, 64],
+                        help='composed sizes to try without recorder and logger (ascending)')
     parser.add_argument('--rt-steps', type=int, default=20, help='real-time steps per size')
     args = parser.parse_args()
     with tempfile.TemporaryDirectory(prefix='sat_bench_swarm_') as tmp:
@@ -114,13 +126,16 @@ def main() -> int:
               flush=True)
         processes = real_time_sizes(args.sizes, False, args.rt_steps, work)
         composed = real_time_sizes(args.composed, True, args.rt_steps, work)
+        bare = real_time_sizes(args.bare, True, args.rt_steps, work, observers=False)
     summary = {'paper_lock_step_wall_s': round(wall, 1), 'paper_exit_code': code,
                'paper_msgs_per_agent_step': messages, 'paper_bytes_per_agent_step': nbytes,
                'largest_real_time_processes': largest(processes),
                'largest_real_time_composed': largest(composed),
-               'real_time_runs': processes + composed}
+               'largest_real_time_composed_bare': largest(bare),
+               'real_time_runs': processes + composed + bare}
     print(f"largest 1 Hz swarm: {summary['largest_real_time_processes']} agents as processes "
-          f"(target 16), {summary['largest_real_time_composed']} composed (target 64)")
+          f"(target 16), {summary['largest_real_time_composed']} composed (target 64), "
+          f"{summary['largest_real_time_composed_bare']} composed without recorder and logger")
     if args.json:
         print(json.dumps(summary))
     return 0

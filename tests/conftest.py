@@ -14,6 +14,8 @@ os.environ.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
 
 TESTS_DIR = Path(__file__).resolve().parent
 REPO_ROOT = TESTS_DIR.parent
+# The processes the tests start get the Fast DDS profile the bring-up gives a run.
+os.environ.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(REPO_ROOT / 'config' / 'fastdds.xml'))
 # Test helpers (msg_samples, peers) live beside the tests.
 sys.path.insert(0, str(TESTS_DIR))
 

@@ -14,8 +14,8 @@ setup(
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
         (f'share/{PACKAGE}/launch', glob('launch/*.launch.py')),
-        # The project's parameter and scenario files, so an installed package finds them.
-        (f'share/{PACKAGE}/config', glob('../../config/*.yaml')),
+        # The project's parameter, scenario and Fast DDS files, so an installed package finds them.
+        (f'share/{PACKAGE}/config', glob('../../config/*.yaml') + ['../../config/fastdds.xml']),
         (f'share/{PACKAGE}/config/scenarios', glob('../../config/scenarios/*.yaml')),
     ],
     install_requires=['setuptools'],

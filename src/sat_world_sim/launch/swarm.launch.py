@@ -25,16 +25,20 @@ def _nodes(context):
         share, 'config', 'scenarios', 'paper.yaml')
     count = int(LaunchConfiguration('agents').perform(context))
     ids = list(range(1, count + 1))
+    # Fast repair of lost samples (config/fastdds.xml), unless the user names a profile file.
+    env = {'FASTRTPS_DEFAULT_PROFILES_FILE': os.environ.get(
+        'FASTRTPS_DEFAULT_PROFILES_FILE', os.path.join(share, 'config', 'fastdds.xml'))}
     nodes = [
         Node(package='sat_world_sim', executable='world_sim', name='world_sim',
-             parameters=[params, {'scenario': scenario, 'observers': 1}], output='screen'),
+             parameters=[params, {'scenario': scenario, 'observers': 1}], output='screen',
+             additional_env=env),
         Node(package='sat_world_sim', executable='metrics', name='metrics',
              parameters=[params, {'run_dir': LaunchConfiguration('run_dir').perform(context),
-                                  'agent_ids': ids}], output='screen'),
+                                  'agent_ids': ids}], output='screen', additional_env=env),
     ]
     nodes += [Node(package='sat_agent', executable='agent', name='agent',
                    namespace=f'agent_{i}', parameters=[params, {'agent_id': i}],
-                   output='screen')
+                   output='screen', additional_env=env)
               for i in ids]
     return nodes
 

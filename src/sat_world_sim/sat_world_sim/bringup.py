@@ -29,7 +29,7 @@ import threading
 import time
 from typing import List, Optional
 
-from ament_index_python.packages import get_package_prefix
+from ament_index_python.packages import get_package_prefix, get_package_share_directory
 
 from sat_agent.config import load_params_file, ParameterError
 
@@ -117,11 +117,17 @@ def private_domain_id() -> int:
 
 
 def ros_env(domain_id: Optional[int]) -> dict:
-    """Return the children's environment: private domain, discovery on this host only."""
+    """Return the children's environment: private domain, discovery on this host only.
+
+    Fast DDS gets config/fastdds.xml (fast repair of lost samples, see the file) unless the
+    user names a profile file of their own.
+    """
     env = dict(os.environ)
     env['ROS_DOMAIN_ID'] = str(domain_id if domain_id is not None else private_domain_id())
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
+    env.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(
+        Path(get_package_share_directory('sat_world_sim')) / 'config' / 'fastdds.xml'))
     env['PYTHONUNBUFFERED'] = '1'
     return env
 

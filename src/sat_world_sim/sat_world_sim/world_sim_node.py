@@ -38,7 +38,7 @@ from rclpy.node import Node
 from std_msgs.msg import String
 
 from sat_agent.agent_core import wire_bytes
-from sat_agent.input_guard import InputGuard
+from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.msg_conversions import (InvalidMessage, measurements_to_msg, point,
                                        RADIO_TYPES, report_part_from_msg)
 from sat_agent.node_runner import finish_run, run_nodes
@@ -165,7 +165,13 @@ class WorldSimNode(Node):
             return
         if self.clock == 'real_time':
             if now >= self._deadline:
-                self.late_commands += len(self.active - set(self._cmds))
+                late = sorted(self.active - set(self._cmds))
+                if late:
+                    self.late_commands += len(late)
+                    self.get_logger().warning(
+                        f'step {self.world.step}: no command in time from agents {late} '
+                        f'({self.late_commands} late so far): they hold position',
+                        throttle_duration_sec=LOG_THROTTLE_S)
                 self._finish_step()
         elif now >= self._deadline:
             silent = sorted(i for i in self.active if not self._answered(i))

@@ -1,0 +1,30 @@
+"""The environment the bring-up gives every process of a run."""
+
+from pathlib import Path
+import xml.etree.ElementTree as ElementTree
+
+from sat_world_sim.bringup import ros_env
+
+FASTDDS = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
+
+
+def test_a_run_gets_its_own_domain_localhost_discovery_and_the_fast_dds_profile(monkeypatch):
+    monkeypatch.delenv('FASTRTPS_DEFAULT_PROFILES_FILE', raising=False)
+    monkeypatch.delenv('ROS_AUTOMATIC_DISCOVERY_RANGE', raising=False)
+    env = ros_env(7)
+    assert env['ROS_DOMAIN_ID'] == '7' and env['ROS_AUTOMATIC_DISCOVERY_RANGE'] == 'LOCALHOST'
+    assert 1 <= int(ros_env(None)['ROS_DOMAIN_ID']) <= 100
+    # The installed copy of config/fastdds.xml: reliable writers announce unacknowledged
+    # samples every 100 ms, so a lost sample is repaired within a step (the file says why).
+    profile = Path(env['FASTRTPS_DEFAULT_PROFILES_FILE'])
+    writer = ElementTree.parse(profile).getroot().find(f'{FASTDDS}data_writer')
+    assert writer.get('is_default_profile') == 'true'
+    period = writer.find(f'{FASTDDS}times/{FASTDDS}heartbeatPeriod')
+    assert (period.findtext(f'{FASTDDS}sec'), period.findtext(f'{FASTDDS}nanosec')) == (
+        '0', '100000000')
+
+
+def test_a_profile_file_of_the_users_own_wins(monkeypatch, tmp_path):
+    own = tmp_path / 'mine.xml'
+    monkeypatch.setenv('FASTRTPS_DEFAULT_PROFILES_FILE', str(own))
+    assert ros_env(3)['FASTRTPS_DEFAULT_PROFILES_FILE'] == str(own)
