@@ -244,7 +244,7 @@ class Agent:
         """Tentative peaks to look at from SEARCH (X-hat_{k+1|k} of them), or None.
 
         A design choice the paper leaves open: one pass of a searching agent gives a target
-        2-3 scans, too few to confirm it under lambda = 10 clutter (a tracked target's PHD mass
+        2-3 scans, too few to confirm it under dense clutter (a tracked target's PHD mass
         grows by ~1 + g/kappa per scan, and not at all while the agent flies over it). So a
         searching agent that sees an unconfirmed peak holds its walk for up to
         ``search.investigate_steps`` steps and places itself with the tracking control (Eqn.

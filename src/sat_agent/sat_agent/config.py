@@ -142,7 +142,7 @@ class PhdParams:
     birth_particles_uniform: int = 2000
     # Measurement-driven births inside the sensing square (adaptive birth, Ristic et al. 2012):
     # a measurement z at range r seeds mass m_b (r / r_max) (1 - tau(z) / (kappa + tau(z))),
-    # m_b = birth_mass_measurement (phd_filter.py). With the paper's clutter ~0.5 false alarms
+    # m_b = birth_mass_measurement (phd_filter.py). With the paper's clutter ~0.3 false alarms
     # fall in the square per scan, so most measurements there are targets: 0.5 lets a target
     # that a searching agent passes reach round(mass) = 1 on its 2-3 scans (0.3 misses seed 0
     # of single_target.yaml). Under the dense reading of the clutter (all 10 around the agent,
@@ -163,9 +163,10 @@ class PhdParams:
     peak_radius: float = 3.0
     # Track continuity: a target of k-1 continues while the peak found from its predicted
     # position x + v T, within continue_gate (a walking target moves ~1 m/step, its estimate
-    # errs ~1 m), keeps continue_threshold of mass. Under lambda = 10 clutter a tracked
-    # target's PHD mass settles at ~0.3-0.6 (0.99 - kappa / g_bar), below the 0.5 that
-    # round(mass) needs, so a target is kept down to 0.2; below that it is lost.
+    # errs ~1 m), keeps continue_threshold of mass. Under the dense reading of the clutter
+    # (config/dense_clutter.yaml) a tracked target's PHD mass settles at ~0.3-0.6
+    # (0.99 - kappa / g_bar), below the 0.5 that round(mass) needs, so a target is kept down
+    # to 0.2; below that it is lost.
     continue_threshold: float = 0.2
     continue_gate: float = 3.0
     # Confirmation: a new target needs round(mass) >= 1 on confirm_scans scans in a row at

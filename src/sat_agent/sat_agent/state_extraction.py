@@ -2,9 +2,10 @@
 
 The paper estimates n_hat(R) = round(integral of D^1 over R) targets in a region R and takes the
 n_hat highest peaks. Rounding the mass of the whole sensing square counts diffuse mass as a
-target: under lambda = 10 clutter every scan leaves small clouds of clutter-born mass (each
-< 0.5, together often > 0.5) scattered over the square. So the regions R here are the PHD's
-peaks: mass is counted per peak, and a peak stands for round(its mass) targets.
+target: under dense clutter (10 false alarms per scan around the agent) every scan leaves small
+clouds of clutter-born mass (each < 0.5, together often > 0.5) scattered over the square. So
+the regions R here are the PHD's peaks: mass is counted per peak, and a peak stands for
+round(its mass) targets.
 
 Within the extraction region (the sensing square grown by ``phd.extraction_margin``), with
 r = ``phd.peak_radius``:
@@ -13,7 +14,7 @@ r = ``phd.peak_radius``:
    extracted at k-1, in order, mean-shift from its predicted position x + v T over the
    unclaimed particles within r; if the peak stays within ``phd.continue_gate`` and its region
    (unclaimed particles within r) holds at least ``phd.continue_threshold``, the target
-   continues with max(1, floor(mass)) estimates and the region is claimed. Under lambda = 10
+   continues with max(1, floor(mass)) estimates and the region is claimed. Under dense
    clutter a tracked target's mass settles at ~0.3-0.6 (0.99 - kappa / g_bar), so requiring
    round(mass) >= 1 at every step would drop it every few steps;
 2. new peaks: the heaviest cell of the unclaimed weights binned on a ``PEAK_CELL`` grid and

@@ -14,7 +14,7 @@ in particle form (both densities share the particles, D_hat = f D):
 Stand-off (a choice the paper leaves open): the argmax runs over the admissible actions that
 keep every predicted target at least ``cooperation.track_standoff`` from the agent and
 ``cooperation.track_edge_margin`` inside the square (all admissible actions when none does).
-Under lambda = 10 clutter, uniform in [range, bearing], the clutter density in the plane is
+Under clutter uniform in [range, bearing] the clutter density in the plane is
 kappa / d per m^2: next to the agent a detection is barely distinguishable from clutter (and
 sigma_r = 1 m while the bearing says nothing in metres), so the Renyi score of the ideal
 measurement set, which ignores clutter realisations, would put the agent on top of the target
