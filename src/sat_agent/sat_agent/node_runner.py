@@ -8,10 +8,12 @@ callback per radio message, so with 16 agents the waits cost more CPU than the w
 rclpy falls back to the SingleThreadedExecutor.
 """
 
+import signal
 import sys
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.signals import SignalHandlerOptions
 
 try:
     from rclpy.experimental import EventsExecutor as FastExecutor
@@ -20,6 +22,8 @@ except ImportError:
 
 # How long one spin waits for work before the loop looks at rclpy.ok() and finish requests.
 SPIN_TIMEOUT_S = 0.1
+# Signals that end a process cleanly (Ctrl-C, the bring-up's stop, `kill`).
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 def finish_run(node, code: int = 0):
@@ -39,12 +43,19 @@ def _exit_code(nodes):
 def run_nodes(name: str, factory, args=None) -> int:
     """Create the node(s) factory() returns, spin them in one executor, return the exit code.
 
-    Ctrl-C and external shutdown end cleanly with 0; a ValueError or OSError while building the
-    nodes (bad parameters, a missing or malformed scenario or YAML file) is printed as one line
-    naming the problem and gives 2; finish_run from a callback ends the spin with its code.
-    Any other error is a bug and propagates with its traceback.
+    Ctrl-C, SIGTERM and external shutdown end cleanly with 0; a ValueError or OSError while
+    building the nodes (bad parameters, a missing or malformed scenario or YAML file) is printed
+    as one line naming the problem and gives 2; finish_run from a callback ends the spin with
+    its code. Any other error is a bug and propagates with its traceback.
+
+    The stop signals only set a flag that the loop reads between callbacks. rclpy's own handlers
+    raise KeyboardInterrupt wherever the main thread is, and inside a callback the
+    EventsExecutor reports that as a FATAL exception before the process ends.
     """
-    rclpy.init(args=args)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    stop_requests = []
+    previous = {number: signal.signal(number, lambda number, _: stop_requests.append(number))
+                for number in STOP_SIGNALS}
     nodes = []
     code = None
     try:
@@ -59,7 +70,7 @@ def run_nodes(name: str, factory, args=None) -> int:
             executor.add_node(node)
         # spin_once in a loop rather than spin(): EventsExecutor.spin() of rclpy 7.1.5 never
         # runs a callback, and the loop is where finish requests are seen.
-        while code is None and rclpy.ok():
+        while code is None and not stop_requests and rclpy.ok():
             executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
             code = _exit_code(nodes)
     except (KeyboardInterrupt, ExternalShutdownException):
@@ -68,4 +79,6 @@ def run_nodes(name: str, factory, args=None) -> int:
         for node in nodes:
             node.destroy_node()
         rclpy.try_shutdown()
+        for number, handler in previous.items():
+            signal.signal(number, handler)
     return code or 0
