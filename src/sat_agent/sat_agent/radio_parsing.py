@@ -1,13 +1,13 @@
 """Radio messages as serialized bytes: deserialize and validate each distinct message once.
 
 world_sim forwards a sender's report to every agent in range. It subscribes to the radio/out
-topics raw and republishes the very bytes it received (no re-serialisation per receiver), and
-the agents subscribe to their radio/in topics raw. In composed mode many agents share one
-process, which then receives the same bytes once per receiver: ~30 copies of every message
-with 64 agents spread over the area. A RadioParser shared by those agents deserializes and
-validates each distinct message once (for a density that includes the zlib decode); the other
-copies cost a dict lookup. The parsed contents are read-only (a decoded density is a view of
-immutable bytes), so agents can share them.
+topics raw, parses them here and republishes the very bytes it received (no re-serialisation
+per receiver), and the agents subscribe to their radio/in topics raw. In composed mode many
+agents share one process, which then receives the same bytes once per receiver: ~30 copies of
+every message with 64 agents spread over the area. A RadioParser shared by those agents
+deserializes and validates each distinct message once (for a density that includes the zlib
+decode); the other copies cost a dict lookup. The parsed contents are read-only (a decoded
+density is a view of immutable bytes), so agents can share them.
 """
 
 from typing import Tuple
@@ -16,14 +16,6 @@ from rclpy.serialization import deserialize_message
 
 from sat_agent.msg_conversions import InvalidMessage, RADIO_TYPES, report_part_from_msg
 from sat_agent.search_density import Lattice
-
-
-def deserialize_radio(kind: str, data: bytes):
-    """Return the message of this kind in data; InvalidMessage('undecodable') if it is not one."""
-    try:
-        return deserialize_message(data, RADIO_TYPES[kind])
-    except Exception as error:     # rclpy raises different types for different CDR defects
-        raise InvalidMessage('undecodable', f'not a {kind} message ({error})') from None
 
 
 class RadioParser:
@@ -53,9 +45,9 @@ class RadioParser:
     @staticmethod
     def _parse(kind: str, data: bytes, lattice: Lattice) -> Tuple[object, object]:
         try:
-            msg = deserialize_radio(kind, data)
-        except InvalidMessage as error:
-            return None, error
+            msg = deserialize_message(data, RADIO_TYPES[kind])
+        except Exception as error:     # rclpy raises different types for different CDR defects
+            return None, InvalidMessage('undecodable', f'not a {kind} message ({error})')
         try:
             return msg, report_part_from_msg(kind, msg, lattice)
         except InvalidMessage as error:

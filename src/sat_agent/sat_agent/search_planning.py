@@ -252,15 +252,9 @@ class SearchPlanner:
         search = self._params.search
         own_start = _point(starts[own_id])
         if self._reason == ReplanReason.EXHAUSTED:
-            # The nodes in view are being searched now: planning them again would give a walk
-            # that is visited at once, and an agent short of a node's far edge would replan
-            # that same node at every step and never move.
-            values = values.copy()
-            values[nodes_in_view(self._map, own_start, self._params.sensor.square_side)] = 1.0
-        nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
-        if self._reason == ReplanReason.EXHAUSTED:
-            self._plan_alone(own_id, own_start, nodes)
+            self._plan_alone(own_id, own_start, values)
         else:
+            nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
             walks = planned_walks(starts, self._map.centers, nodes, search.planner)
             self._walk = np.asarray(walks.pop(int(own_id)), dtype=np.int64)
             self._claims = np.asarray(sum(walks.values(), []), dtype=np.int64)
@@ -270,13 +264,19 @@ class SearchPlanner:
         self._reason = ReplanReason.NONE
         return self._walk.tolist()
 
-    def _plan_alone(self, own_id: int, start: np.ndarray, nodes: np.ndarray):
+    def _plan_alone(self, own_id: int, start: np.ndarray, node_values: np.ndarray):
+        # The nodes in view are being searched now: planning them again would give a walk that
+        # is visited at once, and an agent short of a node's far edge would replan that same
+        # node at every step and never move.
+        values = node_values.copy()
+        values[nodes_in_view(self._map, start, self._params.sensor.square_side)] = 1.0
+        search = self._params.search
+        nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
         unclaimed = np.setdiff1d(nodes, self._claims)
         if not unclaimed.size:
             unclaimed = nodes
             self._claims = np.zeros(0, dtype=np.int64)
-        walks = planned_walks({own_id: start}, self._map.centers, unclaimed,
-                              self._params.search.planner)
+        walks = planned_walks({own_id: start}, self._map.centers, unclaimed, search.planner)
         self._walk = np.asarray(walks[own_id], dtype=np.int64)
         self._group = self._group | {int(own_id)}
 

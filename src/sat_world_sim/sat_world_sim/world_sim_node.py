@@ -39,11 +39,10 @@ from std_msgs.msg import String
 
 from sat_agent.agent_core import wire_bytes
 from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
-from sat_agent.msg_conversions import (InvalidMessage, measurements_to_msg, point,
-                                       RADIO_TYPES, report_part_from_msg)
+from sat_agent.msg_conversions import InvalidMessage, measurements_to_msg, point, RADIO_TYPES
 from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.qos import RADIO, STEP, WORLD
-from sat_agent.radio_parsing import deserialize_radio
+from sat_agent.radio_parsing import RadioParser
 from sat_agent.ros_params import declare_sat_params
 from sat_agent.search_density import Lattice
 from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet, RadioTraffic,
@@ -97,6 +96,8 @@ class WorldSimNode(Node):
         self.active = set(self.ids)
         self.guard = InputGuard(self, 'world_sim')
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
+        # Each report arrives once, so nothing to cache (radio_parsing.py).
+        self.radio_parser = RadioParser()
         self.late_commands = 0
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
@@ -278,20 +279,17 @@ class WorldSimNode(Node):
 
     def on_report(self, agent_id: int, kind: str, data: bytes):
         """Validate an agent's report message and hand it to the radio (never forward garbage)."""
-        try:
-            msg = deserialize_radio(kind, data)
-        except InvalidMessage as error:
-            self.guard.drop(error.reason, f'{kind} of agent {agent_id}: {error.detail}')
+        msg, part = self.radio_parser.parse(kind, data, self.lattice)
+        if msg is None:
+            self.guard.drop(part.reason, f'{kind} of agent {agent_id}: {part.detail}')
             return
         if not self._current(agent_id, msg, f'radio/out/{kind}'):
             return
         if kind in self._reports[agent_id]:
             self.guard.drop('duplicate', f'second {kind} of agent {agent_id} at {msg.step}')
             return
-        try:
-            part = report_part_from_msg(kind, msg, self.lattice)
-        except InvalidMessage as error:
-            self.guard.drop(error.reason, f'{kind} of agent {agent_id}: {error.detail}')
+        if isinstance(part, InvalidMessage):
+            self.guard.drop(part.reason, f'{kind} of agent {agent_id}: {part.detail}')
             return
         self.guard.accept(f'radio/out/{kind}')
         self._reports[agent_id].add(kind)
