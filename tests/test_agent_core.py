@@ -8,7 +8,7 @@ from sat_agent.agent_core import Agent
 from sat_agent.config import SatParams
 from sat_agent.mode_machine import Mode
 from sat_agent.search_map import nodes_in_view, unvisited_nodes
-from sat_agent.search_planning import joint_plan, ReplanReason
+from sat_agent.search_planning import joint_plan, ReplanReason, search_action
 from sat_agent.sensor_model import measure
 
 NO_MEASUREMENTS = np.zeros((0, 2))
@@ -188,6 +188,32 @@ def test_searching_agent_holds_its_walk_to_look_at_a_tentative_peak():
     quiet = [fresh.step(k, pose, NO_MEASUREMENTS, []) for k in range(1, 5)]
     assert not quiet[3].estimate.tentative
     np.testing.assert_allclose(quiet[3].goal, fresh.planner.next_goal())
+
+
+def test_searching_agent_keeps_a_spot_seen_once_in_its_next_square_then_resumes_its_walk():
+    # The paper reading of the clutter: one measurement 4 m from the agent seeds 0.28 of birth
+    # mass, above phd.tentative_threshold.
+    params = small_params().with_overrides({'sensor.clutter_max_range': 141.42,
+                                            'phd.birth_mass_measurement': 0.5})
+    pose = np.array([50.0, 50.0])
+    free = Agent(1, params, pose, seed=4).step(1, pose, NO_MEASUREMENTS, [])
+    ahead = candidate_poses(pose, params.actions)[free.action] - pose
+    spot = pose - 4.0 * ahead / np.linalg.norm(ahead)     # seen once, behind the move
+    assert np.max(np.abs(spot - free.goal)) > params.sensor.square_side / 2.0 or \
+        np.max(np.abs(spot - (pose + ahead))) > params.sensor.square_side / 2.0
+    agent = Agent(1, params, pose, seed=4)
+    first = agent.step(1, pose, measure(spot[None], pose), [])
+    assert first.mode == Mode.SEARCH and not first.estimate.targets
+    next_pose = candidate_poses(pose, params.actions)[first.action]
+    inner = params.sensor.square_side / 2.0 - params.cooperation.track_edge_margin
+    assert np.max(np.abs(spot - next_pose)) <= inner
+    # The walk is unchanged: the goal is still its next node.
+    np.testing.assert_allclose(first.goal, agent.planner.next_goal())
+    # Nothing there at the next scan (a false alarm): the walk's own move, at once.
+    second = agent.step(2, next_pose, NO_MEASUREMENTS, [])
+    assert not second.estimate.tentative
+    expected = search_action(next_pose, agent.planner.next_goal(), params)
+    assert second.action == expected
 
 
 def test_two_trackers_of_one_target_detect_the_overlap_and_the_higher_id_leaves():

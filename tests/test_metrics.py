@@ -120,6 +120,16 @@ def test_swarm_estimate_merges_duplicates_within_the_merge_distance():
     assert swarm_estimate({}, 3.0).shape == (0, 2)
 
 
+def test_swarm_estimate_keeps_one_agents_close_estimates_apart():
+    # One agent tracking two targets 2 m apart reports two targets; a second agent's estimate
+    # of one of them joins the nearer, and only one, of the two.
+    own = swarm_estimate({1: np.array([[10.0, 10.0], [12.0, 10.0]])}, merge_distance=3.0)
+    np.testing.assert_allclose(own, [[10.0, 10.0], [12.0, 10.0]])
+    both = swarm_estimate({1: np.array([[10.0, 10.0], [12.0, 10.0]]),
+                           2: np.array([[12.5, 10.0], [10.5, 10.0]])}, merge_distance=3.0)
+    np.testing.assert_allclose(both, [[10.25, 10.0], [12.25, 10.0]])
+
+
 def test_two_agents_on_one_target_count_once():
     records = [record(1, [[50.0, 50.0]], {1: (50, 50), 2: (52, 50)},
                       {1: [[50.0, 51.0]], 2: [[50.0, 49.0]]}, {1: 'TRACK', 2: 'TRACK'})]

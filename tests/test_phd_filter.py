@@ -8,8 +8,8 @@ import pytest
 
 from sat_agent import sensor_model
 from sat_agent.config import SatParams
-from sat_agent.phd_filter import (measurement_births, particle_budget, ParticlePHD, resample,
-                                  SatPhdFilter, uniform_births, update_weights)
+from sat_agent.phd_filter import (birth_spots, measurement_births, particle_budget, ParticlePHD,
+                                  resample, SatPhdFilter, uniform_births, update_weights)
 
 POSE = np.array([50.0, 50.0])
 SIDE = SatParams().sensor.square_side
@@ -182,6 +182,23 @@ def test_measurements_the_targets_explain_seed_no_births():
     expected = params.phd.birth_mass_measurement * 4.0 / params.sensor.max_range * 0.75
     per_z = params.phd.birth_particles_per_measurement
     np.testing.assert_allclose(born.weights, expected / per_z, rtol=1e-12)
+
+
+def test_birth_spots_are_the_seeding_measurements_with_their_birth_masses():
+    params = SatParams()
+    z = np.array([[3.0, 0.0], [7.0, 0.0], [4.0, np.pi / 2]])   # the 7 m one: beyond the edge
+    explained = np.array([0.0, 0.0, 0.5])
+    spots = birth_spots(z, POSE, params, explained)
+    np.testing.assert_allclose(spots.positions, [[53.0, 50.0], [50.0, 54.0]], atol=1e-12)
+    m_b, r_max = params.phd.birth_mass_measurement, params.sensor.max_range
+    np.testing.assert_allclose(spots.masses, [m_b * 3.0 / r_max, m_b * 4.0 / r_max * 0.5])
+    # The particles measurement_births seeds carry exactly these masses.
+    per_z = params.phd.birth_particles_per_measurement
+    born = measurement_births(z, POSE, params, np.random.default_rng(2), explained)
+    np.testing.assert_allclose(np.unique(born.weights), np.sort(spots.masses) / per_z)
+    sat = SatPhdFilter(params, np.random.default_rng(2))
+    sat.correct(z, POSE)
+    np.testing.assert_allclose(sat.birth_spots.positions, spots.positions)
 
 
 def test_update_reports_the_share_of_each_measurement_the_targets_explain():

@@ -132,6 +132,24 @@ def test_search_action_ties_go_to_the_lowest_action():
     assert search_action((50.0, 50.0), (53.0, 50.0), PARAMS) == 1
 
 
+def test_search_action_keeps_a_point_to_hold_inside_the_next_square():
+    inner = PARAMS.sensor.square_side / 2.0 - PARAMS.cooperation.track_edge_margin
+    poses = candidate_poses((50.0, 50.0), PARAMS.actions)
+    # A point 3 m behind the agent: the 4 m step east would leave it 7 m behind, outside the
+    # square; the 2 m step east keeps it 5 m behind, outside the inner square too. Of the
+    # actions that hold it, staying is the nearest to the goal.
+    behind = np.array([[47.0, 50.0]])
+    action = search_action((50.0, 50.0), (60.0, 50.0), PARAMS, keep_in_view=behind)
+    assert action == 0
+    assert np.max(np.abs(poses[action] - behind[0])) <= inner
+    # A point ahead costs nothing: the free choice already holds it.
+    ahead = np.array([[55.0, 50.0]])
+    assert search_action((50.0, 50.0), (60.0, 50.0), PARAMS, keep_in_view=ahead) == 9
+    # No action can hold a point 20 m away: the constraint is dropped.
+    far = np.array([[30.0, 50.0]])
+    assert search_action((50.0, 50.0), (60.0, 50.0), PARAMS, keep_in_view=far) == 9
+
+
 def test_search_action_never_leaves_the_area_at_a_corner():
     # The goal lies beyond the corner: the 4 m diagonal step would leave the area, the 2 m
     # diagonal step (action 6, angle 225 degrees) is the nearest admissible pose.

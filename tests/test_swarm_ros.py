@@ -110,11 +110,11 @@ def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, r
         assert np.all(observer.density[(i, contact)] >= observer.density[(j, contact - 1)])
 
 
-TRACKING_NOT_MET = (
-    'issue requirement not met yet: in this run both targets walk through area searched before '
-    'their birth and never enter a sensing square, so nothing is detected or tracked (README, '
-    '"Status and known limits"; in-process: tests/test_inprocess_swarm.py); remove this marker '
-    'once it passes')
+OSPA_NOT_MET = (
+    'issue requirement not met yet: 3.26 m. Target 2 walks outside every sensing square for its '
+    'first 25 steps while agent 2 tracks target 1, and the OSPA counts it missed (7.07 m) at '
+    'each of them (README, "Status and known limits"; in-process: tests/test_inprocess_swarm.py); '
+    'remove this marker once it passes')
 
 
 @pytest.mark.slow
@@ -136,7 +136,6 @@ def test_paper_scenario_runs_through_the_ros_graph(paper_run):
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
-@pytest.mark.xfail(strict=True, reason=TRACKING_NOT_MET)
 def test_paper_scenario_figures_through_the_ros_graph(paper_run):
     _, code, metrics, output = paper_run
     assert code == 0, output[-3000:]
@@ -148,9 +147,18 @@ def test_paper_scenario_figures_through_the_ros_graph(paper_run):
     assert tracking and tracking[-1]['searched_pct'] > tracking[0]['searched_pct']
     for target in metrics['targets']:
         assert target['detection_delay'] is not None and target['detection_delay'] <= 10, target
-    assert np.mean([s['ospa'] for s in tracking]) <= 3.0
     # One tracks while the other searches.
     assert any(sorted(s['modes'].values()) == ['SEARCH', 'TRACK'] for s in tracking)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+@pytest.mark.xfail(strict=True, reason=OSPA_NOT_MET)
+def test_paper_scenario_mean_ospa_while_tracking_through_the_ros_graph(paper_run):
+    _, code, metrics, output = paper_run
+    assert code == 0, output[-3000:]
+    tracking = [s['ospa'] for s in metrics['steps'] if s['tracking']]
+    assert tracking and np.mean(tracking) <= 3.0
 
 
 @pytest.mark.slow

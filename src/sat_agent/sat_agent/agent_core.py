@@ -172,10 +172,12 @@ class Agent:
         self._previous_searchers: frozenset = frozenset()
         self._expected = np.zeros((0, 2))
         self._candidates = (np.zeros((0, 2)), np.zeros(0, dtype=int))
-        # Investigation in SEARCH: steps spent on tentative peaks, the spots given up on.
+        # Investigation in SEARCH: steps spent on a tentative peak or newborn spot, the spots
+        # given up on.
         self._investigated = 0
         self._abandoned: list = []
         self._look: tuple = ()
+        self._looking_at_newborn = False
         # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
         self.filter.predict(np.asarray(initial_pose, dtype=float))
 
@@ -220,15 +222,19 @@ class Agent:
                              self.filter.search.values.astype(np.float32), estimate)
         self.filter.predict(pose)
         look = self._investigation(mode, estimate)
-        if look is not None:
+        # A newborn spot only asks the search move to keep it in the next square.
+        keep = look.positions() if look is not None and self._looking_at_newborn else None
+        if look is not None and keep is None:
             action, _ = tracking_action(self.filter.targets, look, pose, self.params)
             goal = candidate_poses(pose, self.params.actions)[action]
             plan = self.planner.walk_points()
         elif mode == Mode.SEARCH and self.baseline is not None:
             action, goal, plan = self.baseline.choose(pose)
+            if keep is not None:
+                action = search_action(pose, goal, self.params, keep)
         elif mode == Mode.SEARCH:
             goal = self._search_goal(pose)
-            action = search_action(pose, goal, self.params)
+            action = search_action(pose, goal, self.params, keep)
             plan = self.planner.walk_points()
         else:
             predicted = extract_targets(self.filter.targets, pose, self.params,
@@ -241,7 +247,7 @@ class Agent:
                            mode, leaving_for, replan)
 
     def _investigation(self, mode: Mode, estimate: MultiTargetEstimate):
-        """Tentative peaks to look at from SEARCH (X-hat_{k+1|k} of them), or None.
+        """Tentative peaks or newborn spots to look at from SEARCH (their X-hat_{k+1|k}), or None.
 
         A design choice the paper leaves open: one pass of a searching agent gives a target
         2-3 scans, too few to confirm it under dense clutter (a tracked target's PHD mass
@@ -252,29 +258,52 @@ class Agent:
         round(mass) = 1 twice and the agent enters TRACK, a clutter cloud fades and the walk
         resumes. One spot at a time, the heaviest; the spot of a spent budget is abandoned:
         tentative peaks near it are ignored for 2 * investigate_steps steps.
+
+        Without a tentative peak, the heaviest newborn spot of this scan (a measurement seeding
+        at least phd.tentative_threshold of birth mass) gets one step of the budget, spent on
+        the search move that keeps the spot in the next square (search_action): newborns the
+        next square does not cover are dropped (phd_filter), so a target seen once at the
+        trailing edge of a passing square would otherwise be forgotten. A real target is then a
+        tentative peak; a false alarm leaves nothing and the walk resumes at once.
         """
         budget = self.params.search.investigate_steps
-        gate = self.params.phd.continue_gate
         self._abandoned = [(p, t - 1) for p, t in self._abandoned if t > 1]
         if mode != Mode.SEARCH or self.modes.cooldown_left > 0 or budget == 0:
             self._investigated = 0
             return None
-        fresh = tuple(t for t in estimate.tentative if not any(
-            np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
+        fresh = self._fresh(estimate.tentative)
         if fresh:
             look = (max(fresh, key=lambda t: t.weight),)   # the heaviest spot first
-        elif self._investigated > 0:
+        elif self._investigated > 0 and not self._looking_at_newborn:
             look = self._look      # a peak can fade for a scan (a miss, a near pass): keep on
         else:
-            return None
+            self._investigated = 0
+            look = self._fresh(self._newborn_spots())[:1]
+            if not look:
+                return None
         if self._investigated >= budget:
             self._abandoned += [(t.position, 2 * budget) for t in look]
             self._investigated = 0
             return None
+        self._looking_at_newborn = not fresh
         self._investigated += 1
         dt = self.params.motion.dt
         self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
         return MultiTargetEstimate(self._look, 0.0)
+
+    def _fresh(self, spots: Sequence[TargetEstimate]) -> tuple:
+        """Return the spots farther than phd.continue_gate from every abandoned spot."""
+        gate = self.params.phd.continue_gate
+        return tuple(t for t in spots if not any(
+            np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
+
+    def _newborn_spots(self) -> tuple:
+        """Return this scan's birth spots of at least phd.tentative_threshold, heaviest first."""
+        spots = self.filter.birth_spots
+        order = np.argsort(-spots.masses, kind='stable')
+        order = order[spots.masses[order] >= self.params.phd.tentative_threshold]
+        return tuple(TargetEstimate(spots.positions[i].copy(), np.zeros(2), np.zeros((4, 4)),
+                                    float(spots.masses[i])) for i in order)
 
     def _valid_reports(self, step: int, inbox: Sequence[AgentReport],
                        late: bool = False) -> List[AgentReport]:

@@ -156,28 +156,55 @@ def uniform_births(params: SatParams, rng: np.random.Generator) -> ParticlePHD:
     return ParticlePHD(states, np.full(count, params.phd.birth_rate / count))
 
 
-def measurement_births(measurements: np.ndarray, pose, params: SatParams,
-                       rng: np.random.Generator,
-                       explained: Optional[np.ndarray] = None) -> ParticlePHD:
-    """Measurement-driven part of b_{k+1} from Z_k (see the module docstring).
+@dataclass
+class BirthSpots:
+    """Where the measurement-driven births of the last scan were seeded, with their masses."""
+
+    positions: np.ndarray   # (M', 2) h^-1(z, s_k) of the measurements z in the square
+    masses: np.ndarray      # (M',) m_z
+
+    @classmethod
+    def empty(cls) -> 'BirthSpots':
+        """Return no spots."""
+        return cls(np.zeros((0, 2)), np.zeros(0))
+
+
+def birth_spots(measurements: np.ndarray, pose, params: SatParams,
+                explained: Optional[np.ndarray] = None) -> BirthSpots:
+    """Measurements of Z' (positions in the sensing square) with their birth masses m_z.
 
     explained: (M,) share tau / (kappa + tau) of each measurement already explained by the
     targets (update_weights); a measurement only seeds the unexplained rest of its mass.
     """
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     sensor = params.sensor
-    per_z = params.phd.birth_particles_per_measurement
     unexplained = np.ones(len(z)) if explained is None else 1.0 - np.asarray(explained, float)
-    keep_z = sensor_model.in_sensing_square(sensor_model.to_position(z, pose), pose,
-                                            sensor.square_side)
-    z, unexplained = z[keep_z], unexplained[keep_z]
-    if len(z) == 0 or per_z == 0 or params.phd.birth_mass_measurement == 0.0:
-        return ParticlePHD.empty()
+    positions = sensor_model.to_position(z, pose)
+    keep = sensor_model.in_sensing_square(positions, pose, sensor.square_side)
     # Birth intensity uniform over the square's area: in measurement space its density grows
     # with the range (dx dy = r dr dtheta) while the clutter's is flat, so a far measurement is
     # more likely a new target than a near one; mass m_z = m_b (r / r_max) (1 - explained).
-    mass_z = (params.phd.birth_mass_measurement * np.minimum(z[:, 0] / sensor.max_range, 1.0)
-              * np.clip(unexplained, 0.0, 1.0))
+    masses = (params.phd.birth_mass_measurement * np.minimum(z[keep, 0] / sensor.max_range, 1.0)
+              * np.clip(unexplained[keep], 0.0, 1.0))
+    return BirthSpots(positions[keep], masses)
+
+
+def measurement_births(measurements: np.ndarray, pose, params: SatParams,
+                       rng: np.random.Generator,
+                       explained: Optional[np.ndarray] = None) -> ParticlePHD:
+    """Measurement-driven part of b_{k+1} from Z_k (see the module docstring).
+
+    explained: as in ``birth_spots``.
+    """
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    sensor = params.sensor
+    per_z = params.phd.birth_particles_per_measurement
+    keep_z = sensor_model.in_sensing_square(sensor_model.to_position(z, pose), pose,
+                                            sensor.square_side)
+    mass_z = birth_spots(z, pose, params, explained).masses
+    z = z[keep_z]
+    if len(z) == 0 or per_z == 0 or params.phd.birth_mass_measurement == 0.0:
+        return ParticlePHD.empty()
     repeated = np.repeat(z, per_z, axis=0)
     sigma_r, sigma_b = sensor_model.measurement_sigmas(repeated[:, 0], sensor)
     noisy = repeated + rng.standard_normal(repeated.shape) * np.column_stack([sigma_r, sigma_b])
@@ -202,6 +229,8 @@ class SatPhdFilter:
         self.search = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing))
         # Measurement-driven births from the last scan, joining the targets at the next predict.
         self.pending_births = ParticlePHD.empty()
+        # Where pending_births were seeded: a searching agent may look there again (agent_core).
+        self.birth_spots = BirthSpots.empty()
         self._newborn = slice(0, 0)
 
     def predict(self, previous_pose) -> None:
@@ -235,4 +264,5 @@ class SatPhdFilter:
         self.search.correct(pose, params.sensor)
         self.pending_births = measurement_births(measurements, pose, params, self.rng,
                                                  explained)
+        self.birth_spots = birth_spots(measurements, pose, params, explained)
         self._newborn = slice(0, 0)

@@ -121,14 +121,26 @@ def walk_cost(start, centers: np.ndarray, walk: Sequence[int]) -> float:
     return float(np.sum(np.linalg.norm(np.diff(route, axis=0), axis=1)))
 
 
-def search_action(pose, goal, params: SatParams) -> int:
+def search_action(pose, goal, params: SatParams, keep_in_view=None) -> int:
     """Admissible action of Eqn. controlVectors whose pose is nearest to goal (xi_search).
 
+    keep_in_view: optional (K, 2) points the next sensing square must hold at least
+    ``cooperation.track_edge_margin`` inside its edges (a newborn's measurement is off by
+    sigma_r ~ 1 m); when some admissible action's square holds them all, the choice is limited
+    to those actions.
     Ties (after rounding to 1e-9 m) go to the lowest action index, so the agent stays when
     staying is as good as moving.
     """
-    distances = _costs(_point(goal), candidate_poses(_point(pose), params.actions))
-    distances[~admissible_mask(pose, params.actions, params.area)] = np.inf
+    poses = candidate_poses(_point(pose), params.actions)
+    distances = _costs(_point(goal), poses)
+    allowed = admissible_mask(pose, params.actions, params.area)
+    if keep_in_view is not None:
+        points = np.asarray(keep_in_view, dtype=float).reshape(-1, 2)
+        inner = params.sensor.square_side - 2.0 * params.cooperation.track_edge_margin
+        holding = np.array([in_sensing_square(points, p, inner).all() for p in poses])
+        if np.any(allowed & holding):
+            allowed &= holding
+    distances[~allowed] = np.inf
     return int(np.argmin(distances))
 
 

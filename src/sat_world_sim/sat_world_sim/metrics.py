@@ -6,9 +6,11 @@ swarm, the ROS logger and an offline bag replay can all feed this module.
 Definitions (the paper leaves them open):
 
 - Swarm estimate at step k: the union of every agent's extracted target positions, where points
-  closer than ``merge_distance`` are merged (greedy, in ascending agent id then row order: a
-  point joins the first cluster whose mean is within the distance, clusters are reported as
-  their means). Two agents tracking one target report one target, not two.
+  of different agents closer than ``merge_distance`` are merged (greedy, in ascending agent id
+  then row order: a point joins the nearest cluster without a point of its own agent if that
+  cluster's mean is within the distance; clusters are reported as their means). Two agents
+  tracking one target report one target, not two; one agent's estimates are never merged with
+  each other (its filter tells two close targets apart, as when it tracks both).
 - OSPA (Eqn. ospa, cut-off c = 10 m, order p = 2) between the true positions and the swarm
   estimate; both empty gives 0, so steps with nothing to find and nothing claimed score 0.
 - ``first_in_view``: first step the target's true position is inside some agent's sensing square.
@@ -74,24 +76,25 @@ class MetricsConfig:
 
 def swarm_estimate(estimates: Mapping[int, np.ndarray], merge_distance: float) -> np.ndarray:
     """Merge the agents' estimated positions into one set (see the module docstring)."""
-    points = [np.asarray(estimates[a], dtype=float).reshape(-1, 2) for a in sorted(estimates)]
-    stacked = np.vstack(points) if points else np.zeros((0, 2))
     sums: List[np.ndarray] = []
-    counts: List[int] = []
-    for point in stacked:
-        if sums:
-            means = np.array(sums) / np.array(counts)[:, None]
-            gaps = np.hypot(*(means - point).T)
-            nearest = int(np.argmin(gaps))
-            if gaps[nearest] <= merge_distance:
-                sums[nearest] = sums[nearest] + point
-                counts[nearest] += 1
-                continue
-        sums.append(point.copy())
-        counts.append(1)
+    members: List[set] = []
+    for agent in sorted(estimates):
+        for point in np.asarray(estimates[agent], dtype=float).reshape(-1, 2):
+            # An agent's own estimates are distinct targets: only other agents' points merge.
+            open_clusters = [i for i, ids in enumerate(members) if agent not in ids]
+            if open_clusters:
+                means = np.array([sums[i] / len(members[i]) for i in open_clusters])
+                gaps = np.hypot(*(means - point).T)
+                nearest = int(np.argmin(gaps))
+                if gaps[nearest] <= merge_distance:
+                    sums[open_clusters[nearest]] = sums[open_clusters[nearest]] + point
+                    members[open_clusters[nearest]].add(agent)
+                    continue
+            sums.append(point.copy())
+            members.append({agent})
     if not sums:
         return np.zeros((0, 2))
-    return np.array(sums) / np.array(counts)[:, None]
+    return np.array(sums) / np.array([len(ids) for ids in members])[:, None]
 
 
 def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
