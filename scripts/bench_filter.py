@@ -202,7 +202,7 @@ def decision_step_ms(params, steps=150):
     from sat_world_sim.scenario import scenario_from_mapping
 
     # config/scenarios/single_target.yaml's agent and first target (born in its first walk,
-    # found in 2-4 steps over seeds 0-9), slower and longer-lived, so the agent searches, then
+    # found in 2-6 steps over seeds 0-9), slower and longer-lived, so the agent searches, then
     # tracks for most steps; a second target is born away from it at k = 40.
     scenario = scenario_from_mapping({
         'name': 'bench', 'seed': 0, 'steps': steps, 'truth_process_noise': 1e-4,

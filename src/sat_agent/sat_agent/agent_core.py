@@ -17,7 +17,9 @@
    control (nearest admissible pose to the next node) in SEARCH, the Renyi-divergence tracking
    control (Eqn. track_control) on the predicted PHD and the predicted multi-target state
    X-hat_{k+1|k} in TRACK; in SEARCH with a tentative peak in view, the same tracking control
-   on that peak for up to search.investigate_steps steps (``Agent._investigation``);
+   on that peak for up to search.investigate_steps steps, and with only a measurement seen
+   once (a newborn spot), the search move that keeps it in the next square
+   (``Agent._investigation``);
 7. publish the report of step k: search density, multi-target estimate, mode (what the paper
    exchanges) with agent id, step and pose as header.
 
