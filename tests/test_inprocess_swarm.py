@@ -115,12 +115,6 @@ def paper_figures(run, metrics):
     }
 
 
-OSPA_UNMET = ('not met with config/paper.yaml: 3.26 m. Target 2 walks outside every sensing '
-              'square for its first 25 steps while agent 2 tracks target 1, and the OSPA counts '
-              'it missed (7.07 m) at each of them (README, "Status and known limits"); remove '
-              'this marker once it passes')
-
-
 def test_paper_run_searches_65_percent_of_the_area_by_step_103(paper_run):
     assert paper_figures(*paper_run)['searched_by_103'] >= 65.0
 
@@ -130,7 +124,6 @@ def test_paper_run_detects_each_target_within_10_steps_of_entering_a_square(pape
     assert all(d is not None and 0 <= d <= 10 for d in delays), delays
 
 
-@pytest.mark.xfail(strict=True, reason=OSPA_UNMET)
 def test_paper_run_mean_ospa_while_some_agent_tracks_is_at_most_3m(paper_run):
     value = paper_figures(*paper_run)['mean_ospa_tracking']
     assert value is not None and value <= 3.0

@@ -111,6 +111,22 @@ def test_two_agents_near_one_target_are_a_duplicate():
     assert metrics['summary']['tracked_share'] == 1.0
 
 
+def test_an_estimate_of_one_target_does_not_detect_a_second_target_next_to_it():
+    # Targets 4 m apart, one agent's single estimate on target 0: within 5 m of both, it is
+    # assigned to target 0 only. With a second estimate, on target 1, both are detected.
+    truth = [[50.0, 50.0], [54.0, 50.0]]
+    one = compute_metrics([record(1, truth, {1: (52.0, 52.0)}, {1: [[50.5, 50.0]]},
+                                  {1: 'TRACK'}, ids=[0, 1])], 'unit', 0)
+    assert [t['first_detected'] for t in one['targets']] == [1, None]
+    assert one['steps'][0]['n_tracked'] == 1
+    # Listed in the opposite order, the assignment still pairs each estimate with its target.
+    two = compute_metrics([record(1, truth, {1: (52.0, 52.0)},
+                                  {1: [[53.0, 50.0], [50.5, 50.0]]}, {1: 'TRACK'}, ids=[0, 1])],
+                          'unit', 0)
+    assert [t['first_detected'] for t in two['targets']] == [1, 1]
+    assert two['steps'][0]['n_tracked'] == 2 and two['steps'][0]['n_duplicate'] == 0
+
+
 def test_swarm_estimate_merges_duplicates_within_the_merge_distance():
     merged = swarm_estimate({2: np.array([[11.0, 10.0]]),
                              1: np.array([[10.0, 10.0], [40.0, 40.0]])}, merge_distance=3.0)

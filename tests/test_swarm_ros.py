@@ -110,13 +110,6 @@ def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, r
         assert np.all(observer.density[(i, contact)] >= observer.density[(j, contact - 1)])
 
 
-OSPA_NOT_MET = (
-    'issue requirement not met yet: 3.26 m. Target 2 walks outside every sensing square for its '
-    'first 25 steps while agent 2 tracks target 1, and the OSPA counts it missed (7.07 m) at '
-    'each of them (README, "Status and known limits"; in-process: tests/test_inprocess_swarm.py); '
-    'remove this marker once it passes')
-
-
 @pytest.mark.slow
 @pytest.mark.timeout(600)
 def test_paper_scenario_runs_through_the_ros_graph(paper_run):
@@ -153,7 +146,6 @@ def test_paper_scenario_figures_through_the_ros_graph(paper_run):
 
 @pytest.mark.slow
 @pytest.mark.timeout(600)
-@pytest.mark.xfail(strict=True, reason=OSPA_NOT_MET)
 def test_paper_scenario_mean_ospa_while_tracking_through_the_ros_graph(paper_run):
     _, code, metrics, output = paper_run
     assert code == 0, output[-3000:]

@@ -25,6 +25,10 @@ def test_paper_scenario_file_matches_the_paper():
     t1, t2 = paper.targets
     assert (t1.born, t1.died, t1.start, t1.end) == (104, 179, (50.0, 69.0), (80.0, 31.0))
     assert (t2.born, t2.died, t2.start, t2.end) == (144, 182, (41.0, 29.0), (84.0, 33.0))
+    # "Between time-steps k = 147:179, agent 2 tracks both targets": target 1 passes within a
+    # sensing square of target 2's birth point (config/scenarios/paper.yaml).
+    assert t1.via == ((144, 44.0, 34.0),) and t2.via == ()
+    assert np.hypot(44.0 - 41.0, 34.0 - 29.0) < 10.0
     assert load_scenario(CONFIG / 'scenarios' / 'random.yaml').random_births is not None
 
 
@@ -43,6 +47,22 @@ def test_scripted_targets_are_born_and_die_at_their_steps_and_reach_their_end():
         world.advance()
     assert [k for k, ids in alive.items() if ids == [5]] == [3, 4, 5, 6, 7, 8]
     assert all(ids == [] for k, ids in alive.items() if k not in range(3, 9))
+
+
+def test_scripted_targets_turn_at_their_waypoints():
+    world = World(scenario(targets=[
+        {'id': 5, 'born': 2, 'died': 10, 'start': [20.0, 20.0], 'end': [40.0, 40.0],
+         'via': [[4, 20.0, 30.0], [6, 30.0, 30.0]]}]), SatParams())
+    path = {}
+    for _ in range(11):
+        path[world.step] = world.truth().positions.copy()
+        world.advance()
+    # North 5 m/step to the first waypoint, east 5 m/step to the second, then north-east.
+    np.testing.assert_allclose(path[3], [[20.0, 25.0]], atol=1e-9)
+    np.testing.assert_allclose(path[4], [[20.0, 30.0]], atol=1e-9)
+    np.testing.assert_allclose(path[5], [[25.0, 30.0]], atol=1e-9)
+    np.testing.assert_allclose(path[6], [[30.0, 30.0]], atol=1e-9)
+    np.testing.assert_allclose(path[10], [[40.0, 40.0]], atol=1e-9)
 
 
 def test_reflection_keeps_targets_inside_and_flips_the_crossing_velocity():
@@ -151,6 +171,18 @@ def test_scans_detect_targets_in_the_square_and_name_their_source():
      "'targets[0].died' = 5: allowed range is [10,"),
     ({'targets': [{'id': 1, 'born': 10, 'start': [1, 1], 'end': [2, 2]}]},
      "'targets[0].died' is missing"),
+    ({'targets': [{'id': 1, 'born': 10, 'died': 20, 'start': [1, 1], 'end': [2, 2],
+                   'via': [[10, 5.0, 5.0]]}]},
+     "'targets[0].via[0][0]' = 10: allowed range is [11, 19]"),
+    ({'targets': [{'id': 1, 'born': 10, 'died': 20, 'start': [1, 1], 'end': [2, 2],
+                   'via': [[15, 5.0, 5.0], [12, 6.0, 6.0]]}]},
+     "'targets[0].via[1][0]' = 12: allowed range is [16, 19]"),
+    ({'targets': [{'id': 1, 'born': 10, 'died': 20, 'start': [1, 1], 'end': [2, 2],
+                   'via': [[15, 5.0]]}]},
+     "'targets[0].via[0]' = [15, 5.0]: must be a list [k, x, y]"),
+    ({'targets': [{'id': 1, 'born': 10, 'died': 20, 'start': [1, 1], 'end': [2, 2],
+                   'via': [[15, 5.0, 500.0]]}]},
+     "'targets[0].via[0][2]' = 500.0: allowed range is [0.0, 100.0]"),
     ({'random_births': {'rate': -1.0, 'survival': 0.9, 'speed_std': 1.0}},
      "'random_births.rate' = -1.0: allowed range is [0.0,"),
     ({'truth_process_noise': float('nan')}, "'truth_process_noise' = nan"),

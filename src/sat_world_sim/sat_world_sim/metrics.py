@@ -14,14 +14,17 @@ Definitions (the paper leaves them open):
 - OSPA (Eqn. ospa, cut-off c = 10 m, order p = 2) between the true positions and the swarm
   estimate; both empty gives 0, so steps with nothing to find and nothing claimed score 0.
 - ``first_in_view``: first step the target's true position is inside some agent's sensing square.
+- Estimate of a target: each agent's estimates are assigned one-to-one to the true targets
+  (``linear_sum_assignment`` on the distances, pairs farther than ``detection_radius`` do not
+  count), so an estimate of one target never also counts for a second target next to it.
 - ``first_detected``: first step, at or after the target's birth, with some agent's estimate
-  within ``detection_radius`` of the target's true position.
+  assigned to the target.
 - ``detection_delay`` = first_detected - first_in_view (None when either is None).
 - ``time_to_detection`` = first_detected - born, the search-and-track figure of merit; for a
   target never detected it is censored at the steps it was alive in the records (flagged by
   ``first_detected`` None), so policies that miss targets are not rewarded for it.
-- Tracked target at step k: some agent's estimate within ``detection_radius`` of it
-  (``n_tracked``); tracked by two or more agents at once: a duplicate (``n_duplicate``).
+- Tracked target at step k: some agent's estimate assigned to it (``n_tracked``); tracked by
+  two or more agents at once: a duplicate (``n_duplicate``).
 - ``born`` / ``died``: first and last step the target is alive in the records (``died`` is None
   when it is still alive at the last recorded step).
 """
@@ -31,6 +34,7 @@ import json
 from typing import Dict, List, Mapping, Optional, Sequence
 
 import numpy as np
+from scipy.optimize import linear_sum_assignment
 
 from sat_agent.ospa import ospa
 from sat_agent.sensor_model import in_sensing_square
@@ -190,13 +194,16 @@ def _in_any_square(points: np.ndarray, poses: Mapping[int, np.ndarray], side: fl
 
 
 def _trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
-    """Per true point, how many agents have an estimate within radius of it."""
+    """Per true point, how many agents have an estimate assigned to it (module docstring)."""
     counts = np.zeros(len(points), dtype=int)
     for estimate in estimates.values():
         found = np.asarray(estimate, dtype=float).reshape(-1, 2)
         if len(points) and len(found):
             gaps = np.linalg.norm(points[:, None, :] - found[None, :, :], axis=2)
-            counts += np.any(gaps <= radius, axis=1)
+            # Beyond the radius an assignment is worth nothing: a cost above any sum within it.
+            cost = np.where(gaps <= radius, gaps, radius * (len(points) + len(found) + 1))
+            rows, cols = linear_sum_assignment(cost)
+            counts[rows[gaps[rows, cols] <= radius]] += 1
     return counts
 
 

@@ -8,8 +8,9 @@ A scenario is a YAML mapping (see ``config/scenarios/paper.yaml`` and ``random.y
     truth_process_noise: 1.0e-4   # scale of the paper's Q for the true targets
     agents:                # one entry per agent, ids unique and >= 1
       - {id: 1, start: [10.0, 60.0]}
-    targets:               # scripted targets (optional)
-      - {id: 1, born: 104, died: 179, start: [50.0, 69.0], end: [80.0, 31.0]}
+    targets:               # scripted targets (optional); via: optional [k, x, y] waypoints
+      - {id: 1, born: 104, died: 179, start: [50.0, 69.0], end: [80.0, 31.0],
+         via: [[144, 44.0, 34.0]]}
     random_births:         # random targets (optional)
       rate: 0.02           # expected births per step, uniform over the area
       survival: 0.99       # per-step survival probability of a random target
@@ -17,7 +18,9 @@ A scenario is a YAML mapping (see ``config/scenarios/paper.yaml`` and ``random.y
 
 A scripted target exists on the steps ``born <= k <= died`` (the paper tracks target 1 up to
 k = 179, its death step) and starts with the constant velocity that takes it from ``start`` at
-``born`` to ``end`` at ``died``; the truth process noise makes it arrive only *near* ``end``.
+``born`` to its first waypoint (``via``, steps strictly between born and died, ascending), or to
+``end`` at ``died`` without one. At a waypoint's step its velocity is set again, from where it
+is to the next waypoint or ``end``; the truth process noise makes it arrive only *near* each.
 Every key is checked; unknown keys and bad values raise ScenarioError naming the key, the value
 and what is allowed.
 """
@@ -52,13 +55,25 @@ class ScriptedTarget:
     died: int
     start: Tuple[float, float]
     end: Tuple[float, float]
+    via: Tuple[Tuple[int, float, float], ...] = ()   # (step, x, y), born < step < died
 
     def initial_state(self) -> np.ndarray:
-        """State [x, vx, y, vy] at the birth step, velocity from start to end."""
-        duration = max(self.died - self.born, 1)
-        vx = (self.end[0] - self.start[0]) / duration
-        vy = (self.end[1] - self.start[1]) / duration
+        """State [x, vx, y, vy] at the birth step, velocity from start to the next point."""
+        vx, vy = self.velocity_at(self.born, self.start)
         return np.array([self.start[0], vx, self.start[1], vy])
+
+    def velocity_at(self, step: int, position) -> Optional[np.ndarray]:
+        """Velocity from position to the next waypoint (or end) at its step; None off-schedule.
+
+        Defined at the birth step and at each waypoint's step, where the target turns.
+        """
+        schedule = [(self.born, None)] + [(k, (x, y)) for k, x, y in self.via] \
+            + [(max(self.died, self.born + 1), self.end)]
+        for (turn, _), (arrival, point) in zip(schedule, schedule[1:]):
+            if turn == step:
+                return (np.asarray(point, dtype=float)
+                        - np.asarray(position, dtype=float)) / (arrival - turn)
+        return None
 
 
 @dataclass(frozen=True)
@@ -98,6 +113,7 @@ _TOP_KEYS = ('name', 'seed', 'steps', 'truth_process_noise', 'agents', 'targets'
              'random_births')
 _AGENT_KEYS = ('id', 'start')
 _TARGET_KEYS = ('id', 'born', 'died', 'start', 'end')
+_TARGET_OPTIONAL_KEYS = ('via',)
 _BIRTH_KEYS = ('rate', 'survival', 'speed_std')
 
 
@@ -174,8 +190,8 @@ def _entries(key: str, value: Any) -> list:
     return value
 
 
-def _required(where: str, entry: Mapping, keys) -> None:
-    _known_keys(where, entry, keys)
+def _required(where: str, entry: Mapping, keys, optional=()) -> None:
+    _known_keys(where, entry, tuple(keys) + tuple(optional))
     for key in keys:
         if key not in entry:
             raise ScenarioError(f"scenario key '{where}.{key}' is missing: it is required")
@@ -200,15 +216,32 @@ def _targets(value: Any, steps: int, area) -> Tuple[ScriptedTarget, ...]:
     targets = []
     for index, entry in enumerate(_entries('targets', value)):
         where = f'targets[{index}]'
-        _required(where, entry, _TARGET_KEYS)
+        _required(where, entry, _TARGET_KEYS, _TARGET_OPTIONAL_KEYS)
         born = _integer(f'{where}.born', entry['born'], 1, steps)
         died = _integer(f'{where}.died', entry['died'], born, 10 ** 7)
         targets.append(ScriptedTarget(
             target_id=_integer(f'{where}.id', entry['id'], 0, 10 ** 6), born=born, died=died,
             start=_point(f'{where}.start', entry['start'], area),
-            end=_point(f'{where}.end', entry['end'], area)))
+            end=_point(f'{where}.end', entry['end'], area),
+            via=_waypoints(f'{where}.via', entry.get('via', []), born, died, area)))
     _unique_ids('targets', [t.target_id for t in targets])
     return tuple(targets)
+
+
+def _waypoints(key: str, value: Any, born: int, died: int, area) -> Tuple[tuple, ...]:
+    if not isinstance(value, list):
+        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be a list of [k, x, y]")
+    waypoints = []
+    last = born
+    for index, entry in enumerate(value):
+        where = f'{key}[{index}]'
+        if not isinstance(entry, (list, tuple)) or len(entry) != 3:
+            raise ScenarioError(f"scenario key '{where}' = {entry!r}: must be a list [k, x, y]")
+        step = _integer(f'{where}[0]', entry[0], last + 1, died - 1)
+        waypoints.append((step, _number(f'{where}[1]', entry[1], 0.0, area[0]),
+                          _number(f'{where}[2]', entry[2], 0.0, area[1])))
+        last = step
+    return tuple(waypoints)
 
 
 def _births(value: Any) -> RandomBirths:

@@ -10,8 +10,9 @@ same truth and the same measurement sets whatever carries the messages. One step
 
 Targets follow the paper's near-constant-velocity model (F, Q of Section Evaluation, Q scaled by
 the scenario's ``truth_process_noise``) and reflect off the area's boundary (position mirrored,
-that velocity component negated). Random streams: one for the truth and one per agent's sensor,
-spawned from the scenario seed, so adding an agent does not change the others' clutter.
+that velocity component negated); scripted targets turn at their waypoints (scenario.py).
+Random streams: one for the truth and one per agent's sensor, spawned from the scenario seed, so
+adding an agent does not change the others' clutter.
 """
 
 from dataclasses import dataclass, replace
@@ -21,7 +22,7 @@ import numpy as np
 
 from sat_agent.actions import candidate_poses, inside_area
 from sat_agent.config import SatParams
-from sat_agent.motion_model import positions, propagate
+from sat_agent.motion_model import POSITION, positions, propagate, VELOCITY
 from sat_agent.sensor_model import simulate_scan
 
 from sat_world_sim.scenario import Scenario
@@ -153,6 +154,7 @@ class World:
             self._states = reflect(propagate(self._states, self._motion, self._truth_rng),
                                    self.params.area.width, self.params.area.height)
         self.step = next_step
+        self._turn(next_step)
         self._spawn(next_step)
 
     @property
@@ -189,6 +191,16 @@ class World:
         # Draw for every target so the stream does not depend on which targets are scripted.
         lucky = self._truth_rng.random(len(self._ids)) < survival
         return np.where(scripted, lasts >= next_step, lucky)
+
+    def _turn(self, step: int) -> None:
+        """Scripted targets at a waypoint's step head for their next point."""
+        scripted = {t.target_id: t for t in self.scenario.targets if t.via}
+        for row, target_id in enumerate(self._ids.tolist()):
+            target = scripted.get(target_id)
+            velocity = None if target is None else target.velocity_at(
+                step, self._states[row, POSITION])
+            if velocity is not None:
+                self._states[row, VELOCITY] = velocity
 
     def _spawn(self, step: int) -> None:
         new_ids = [t.target_id for t in self.scenario.targets if t.born == step]
