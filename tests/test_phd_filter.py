@@ -159,7 +159,7 @@ def test_measurement_births_sit_on_measurements_inside_the_square():
     outside_square = ~sensor_model.in_sensing_square(
         sensor_model.to_position(z[2:], POSE), POSE, SIDE)
     assert outside_square.all()
-    born = measurement_births(z, POSE, params, rng)
+    born = measurement_births(birth_spots(z, POSE, params), POSE, params, rng)
     per_z = params.phd.birth_particles_per_measurement
     # m_z = m_b r / r_max: a birth intensity uniform over the square's area.
     m_b, r_max = params.phd.birth_mass_measurement, params.sensor.max_range
@@ -175,7 +175,8 @@ def test_measurements_the_targets_explain_seed_no_births():
     params = SatParams()
     z = np.array([[3.0, 0.0], [4.0, np.pi / 2]])
     explained = np.array([1.0, 0.25])
-    born = measurement_births(z, POSE, params, np.random.default_rng(3), explained)
+    born = measurement_births(birth_spots(z, POSE, params, explained), POSE, params,
+                              np.random.default_rng(3))
     anchors = sensor_model.to_position(z, POSE)
     gaps = np.linalg.norm(born.states[:, None, [0, 2]] - anchors[None], axis=2)
     assert np.all(np.argmin(gaps, axis=1) == 1)         # nothing born from the explained one
@@ -194,7 +195,7 @@ def test_birth_spots_are_the_seeding_measurements_with_their_birth_masses():
     np.testing.assert_allclose(spots.masses, [m_b * 3.0 / r_max, m_b * 4.0 / r_max * 0.5])
     # The particles measurement_births seeds carry exactly these masses.
     per_z = params.phd.birth_particles_per_measurement
-    born = measurement_births(z, POSE, params, np.random.default_rng(2), explained)
+    born = measurement_births(spots, POSE, params, np.random.default_rng(2))
     np.testing.assert_allclose(np.unique(born.weights), np.sort(spots.masses) / per_z)
     sat = SatPhdFilter(params, np.random.default_rng(2))
     sat.correct(z, POSE)

@@ -158,15 +158,16 @@ def uniform_births(params: SatParams, rng: np.random.Generator) -> ParticlePHD:
 
 @dataclass
 class BirthSpots:
-    """Where the measurement-driven births of the last scan were seeded, with their masses."""
+    """The measurements of the last scan that seed births, where, and with what masses."""
 
-    positions: np.ndarray   # (M', 2) h^-1(z, s_k) of the measurements z in the square
-    masses: np.ndarray      # (M',) m_z
+    measurements: np.ndarray   # (M', 2) the [range, bearing] z of Z' (positions in the square)
+    positions: np.ndarray      # (M', 2) h^-1(z, s_k)
+    masses: np.ndarray         # (M',) m_z
 
     @classmethod
     def empty(cls) -> 'BirthSpots':
         """Return no spots."""
-        return cls(np.zeros((0, 2)), np.zeros(0))
+        return cls(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0))
 
 
 def birth_spots(measurements: np.ndarray, pose, params: SatParams,
@@ -186,23 +187,15 @@ def birth_spots(measurements: np.ndarray, pose, params: SatParams,
     # more likely a new target than a near one; mass m_z = m_b (r / r_max) (1 - explained).
     masses = (params.phd.birth_mass_measurement * np.minimum(z[keep, 0] / sensor.max_range, 1.0)
               * np.clip(unexplained[keep], 0.0, 1.0))
-    return BirthSpots(positions[keep], masses)
+    return BirthSpots(z[keep], positions[keep], masses)
 
 
-def measurement_births(measurements: np.ndarray, pose, params: SatParams,
-                       rng: np.random.Generator,
-                       explained: Optional[np.ndarray] = None) -> ParticlePHD:
-    """Measurement-driven part of b_{k+1} from Z_k (see the module docstring).
-
-    explained: as in ``birth_spots``.
-    """
-    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+def measurement_births(spots: BirthSpots, pose, params: SatParams,
+                       rng: np.random.Generator) -> ParticlePHD:
+    """Measurement-driven part of b_{k+1} from the birth spots of Z_k (module docstring)."""
+    z, mass_z = spots.measurements, spots.masses
     sensor = params.sensor
     per_z = params.phd.birth_particles_per_measurement
-    keep_z = sensor_model.in_sensing_square(sensor_model.to_position(z, pose), pose,
-                                            sensor.square_side)
-    mass_z = birth_spots(z, pose, params, explained).masses
-    z = z[keep_z]
     if len(z) == 0 or per_z == 0 or params.phd.birth_mass_measurement == 0.0:
         return ParticlePHD.empty()
     repeated = np.repeat(z, per_z, axis=0)
@@ -262,7 +255,6 @@ class SatPhdFilter:
         weights[self._newborn.start + np.flatnonzero(untested)] = 0.0
         self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
         self.search.correct(pose, params.sensor)
-        self.pending_births = measurement_births(measurements, pose, params, self.rng,
-                                                 explained)
         self.birth_spots = birth_spots(measurements, pose, params, explained)
+        self.pending_births = measurement_births(self.birth_spots, pose, params, self.rng)
         self._newborn = slice(0, 0)

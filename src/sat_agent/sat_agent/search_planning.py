@@ -137,7 +137,7 @@ def search_action(pose, goal, params: SatParams, keep_in_view=None) -> int:
     if keep_in_view is not None:
         points = np.asarray(keep_in_view, dtype=float).reshape(-1, 2)
         inner = params.sensor.square_side - 2.0 * params.cooperation.track_edge_margin
-        holding = np.array([in_sensing_square(points, p, inner).all() for p in poses])
+        holding = in_sensing_square(points[None, :, :], poses[:, None, :], inner).all(axis=1)
         if np.any(allowed & holding):
             allowed &= holding
     distances[~allowed] = np.inf
