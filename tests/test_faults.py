@@ -12,6 +12,7 @@ from ros_harness import executable, PARAMS, REPO, run_swarm, started
 
 from sat_agent.qos import STEP, WORLD
 from sat_msgs.msg import ControlCommand, WorldStep
+from sat_world_sim.observer import ReadyAnnouncer
 
 pytestmark = pytest.mark.ros
 STEPS = 120
@@ -90,7 +91,7 @@ def test_agents_hold_then_exit_cleanly_when_world_sim_dies(tmp_path):
     world_timeout = 4.0
     world = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
              str(PARAMS), '-p', f"scenario:={REPO / 'config' / 'scenarios' / 'paper.yaml'}",
-             '-p', 'observers:=0']
+             '-p', 'observers:=1']
     agent = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
              '--params-file', str(PARAMS), '-p', 'agent_id:=1',
              '-p', f'world_timeout:={world_timeout}']
@@ -99,8 +100,11 @@ def test_agents_hold_then_exit_cleanly_when_world_sim_dies(tmp_path):
     rclpy.init()
     node = rclpy.create_node('world_killer')
     commands = []
-    node.create_subscription(ControlCommand, '/agent_1/cmd',
-                             lambda m: commands.append((time.monotonic(), m.step)), STEP)
+    watch = node.create_subscription(ControlCommand, '/agent_1/cmd',
+                                     lambda m: commands.append((time.monotonic(), m.step)), STEP)
+    # world_sim waits for this watcher: a 200-step lock-step run can be over in 2 s, before a
+    # late-matched subscription sees any command.
+    ReadyAnnouncer(node, [watch])
     try:
         with started(agent, tmp_path / 'agent_1.log') as a1, \
                 started(other, tmp_path / 'agent_2.log'), \
