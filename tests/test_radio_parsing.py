@@ -6,8 +6,8 @@ from rclpy.serialization import serialize_message
 
 from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.config import SatParams
-from sat_agent.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
-from sat_agent.radio_parsing import RadioParser
+from sat_agent.ros.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
+from sat_agent.ros.radio_parsing import RadioParser
 
 PARAMS = SatParams()
 

@@ -20,8 +20,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'agent = sat_agent.agent_node:main',
-            'agents_composed = sat_agent.agent_node:main_composed',
+            'agent = sat_agent.ros.agent_node:main',
+            'agents_composed = sat_agent.ros.agent_node:main_composed',
         ],
     },
 )

@@ -12,7 +12,7 @@ from pathlib import Path
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
-from sat_agent.qos import RADIO, STEP, WORLD
+from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
 TOPIC = '/world/observers'

@@ -5,11 +5,11 @@ Run one per agent in its own namespace::
     ros2 run sat_agent agent --ros-args -r __ns:=/agent_3 -p agent_id:=3 \
         --params-file config/paper.yaml
 
-Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
+Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
 
 - ``measurements`` (sub, MeasurementSet, STEP);
 - ``radio/in/{search_density,estimate,mode}`` (sub, RADIO, raw bytes parsed by
-  sat_agent.radio_parsing, once per process in composed mode);
+  sat_agent.ros.radio_parsing, once per process in composed mode);
 - ``cmd`` (pub, ControlCommand, STEP), ``radio/out/*`` (pub, RADIO);
 - ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder.
 
@@ -18,7 +18,7 @@ Lock-step: a scan says how many radio messages were forwarded to this agent for 
 seconds with what it has (a lost message must not stall it). If world_sim dies, the agent
 holds (it sends no command, so it does not move), resumes when scans come again, and exits
 cleanly (code 0) after ``world_timeout`` seconds without a scan. Every message is validated on
-arrival (sat_agent.msg_conversions: finite numbers, lengths, the grid geometry, known modes,
+arrival (sat_agent.ros.msg_conversions: finite numbers, lengths, the grid geometry, known modes,
 sane counts, stale or future steps, the sender); an invalid one is dropped with a rate-limited
 warning and counted per reason, and the counters go to ``/diagnostics`` every second.
 """
@@ -35,13 +35,14 @@ from rclpy.utilities import remove_ros_args
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
-from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
-from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
-                                       point, RADIO_TYPES, report_from_parts, report_to_msgs)
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.qos import RADIO, STEP
-from sat_agent.radio_parsing import RadioParser
-from sat_agent.ros_params import declare_required_int, declare_sat_params
+from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
+from sat_agent.ros.msg_conversions import (estimate_to_msg, InvalidMessage,
+                                           measurements_from_msg, point, RADIO_TYPES,
+                                           report_from_parts, report_to_msgs)
+from sat_agent.ros.node_runner import finish_run, run_nodes
+from sat_agent.ros.qos import RADIO, STEP
+from sat_agent.ros.radio_parsing import RadioParser
+from sat_agent.ros.ros_params import declare_required_int, declare_sat_params
 from sat_agent.search_density import Lattice
 from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet
 

@@ -2,7 +2,7 @@
 
 import importlib
 
-from sat_agent.qos import RADIO, STEP, WORLD
+from sat_agent.ros.qos import RADIO, STEP, WORLD
 
 
 def message_class(msgtype: str):
@@ -14,7 +14,7 @@ def message_class(msgtype: str):
 
 
 def topic_qos(topic):
-    """Return the QoS a topic of sat_world_sim.topics is published with (sat_agent.qos)."""
+    """Return the QoS a topic of sat_world_sim.topics is published with (sat_agent.ros.qos)."""
     if topic.latched:
         return WORLD
     return RADIO if '/radio/' in topic.name else STEP

@@ -38,18 +38,18 @@ from rclpy.node import Node
 from std_msgs.msg import String
 
 from sat_agent.agent_core import wire_bytes
-from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
-from sat_agent.msg_conversions import InvalidMessage, measurements_to_msg, point, RADIO_TYPES
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.qos import RADIO, STEP, WORLD
-from sat_agent.radio_parsing import RadioParser
-from sat_agent.ros_params import declare_sat_params
+from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
+from sat_agent.ros.msg_conversions import InvalidMessage, measurements_to_msg, point, RADIO_TYPES
+from sat_agent.ros.node_runner import finish_run, run_nodes
+from sat_agent.ros.qos import RADIO, STEP, WORLD
+from sat_agent.ros.radio_parsing import RadioParser
+from sat_agent.ros.ros_params import declare_sat_params
 from sat_agent.search_density import Lattice
 from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet, RadioTraffic,
                           TargetTruth, WorldStep)
 
-from sat_world_sim import observer
 from sat_world_sim.radio import Radio
+from sat_world_sim.ros import observer
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
@@ -138,7 +138,7 @@ class WorldSimNode(Node):
 
         ``observers`` is how many nodes besides the agents must see the run from its first step
         (the metrics node, a logger, a recorder): each announces itself on /world/observers once
-        all its subscriptions are matched (sat_world_sim.observer).
+        all its subscriptions are matched (sat_world_sim.ros.observer).
         """
         for i in self.ids:
             ns = f'/agent_{i}'

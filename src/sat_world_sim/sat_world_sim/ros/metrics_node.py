@@ -12,11 +12,11 @@ import time
 
 from rclpy.node import Node
 
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.ros_params import declare_sat_params
+from sat_agent.ros.node_runner import finish_run, run_nodes
+from sat_agent.ros.ros_params import declare_sat_params
 
-from sat_world_sim.observer import declare_run, watch_run
 from sat_world_sim.records import RunCollector
+from sat_world_sim.ros.observer import declare_run, watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
