@@ -20,7 +20,7 @@ def report_bytes():
     for k in range(1, 4):
         output = agent.step(k, (50.0, 50.0 + k), rng.uniform((0, -3), (7, 3), (4, 2)), [])
     lattice = agent.filter.search.lattice
-    msgs = report_to_msgs(output.report, lattice)
+    msgs = report_to_msgs(output.report, lattice, PARAMS.motion.dt)
     return lattice, output.report, dict(zip(REPORT_KINDS, map(serialize_message, msgs)))
 
 

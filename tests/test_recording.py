@@ -10,9 +10,10 @@ import rclpy
 from ros_harness import executable
 from rosbags.rosbag2 import Reader
 
+from sat_agent.ros.msg_conversions import message_class
 from sat_world_sim.bag_types import sat_typestore
 from sat_world_sim.ros.replay import deep
-from sat_world_sim.ros.replay_support import message_class, topic_qos
+from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]

@@ -19,7 +19,7 @@ from sat_agent.config import SatParams
 
 from sat_world_sim import rerun_view
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.records import RunCollector
+from sat_world_sim.records import route, RunCollector
 from sat_world_sim.topics import agent_of
 
 
@@ -45,11 +45,18 @@ def raw_messages(reader: Reader, connections) -> Iterator[Tuple[object, int, byt
     yield from reader.messages(connections=connections)
 
 
-def deserialized(bag: Path) -> Iterator[Tuple[str, object]]:
-    """Yield (topic, message) of a bag in time order, deserialised with the sat_msgs types."""
+def deserialized(bag: Path, agent_ids: Optional[Sequence[int]] = None
+                 ) -> Iterator[Tuple[str, object]]:
+    """Yield (topic, message) of a bag in time order, deserialised with the sat_msgs types.
+
+    With agent_ids, only the topics metrics and views read (records.route): a bag also holds
+    the standard views, which they do not need.
+    """
     store = sat_typestore()
     with Reader(bag) as reader:
-        for connection, _, raw in raw_messages(reader, reader.connections):
+        connections = [c for c in reader.connections
+                       if agent_ids is None or route(c.topic, agent_ids) is not None]
+        for connection, _, raw in raw_messages(reader, connections):
             yield connection.topic, store.deserialize_cdr(raw, connection.msgtype)
 
 
@@ -58,10 +65,10 @@ def replay_offline(bag: Path, out: Path, params: SatParams) -> dict:
     with Reader(bag) as reader:
         agent_ids = bag_agent_ids(reader)
     collector = RunCollector(agent_ids)
-    for topic, msg in deserialized(bag):
+    for topic, msg in deserialized(bag, agent_ids):
         collector.add(topic, msg)
     area = (params.area.width, params.area.height)
     metrics = collector.write(out, area)
-    rerun_view.write_rrd(deserialized(bag), out / 'run.rrd', agent_ids, area,
+    rerun_view.write_rrd(deserialized(bag, agent_ids), out / 'run.rrd', agent_ids, area,
                          params.sensor.square_side)
     return metrics

@@ -30,7 +30,7 @@ import urllib.parse
 from rclpy.node import Node
 import rerun as rr
 
-from sat_agent.ros.node_runner import finish_run, run_nodes
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.ros_params import declare_sat_params
 
 from sat_world_sim import rerun_view
@@ -76,7 +76,7 @@ class LoggerNode(Node):
         self._finished_at = None
         # world_sim starts step 1 once every subscription here has matched its publisher.
         self.ready = watch_run(self, self.agent_ids, self.buffer.add)
-        self.create_timer(0.1, self._tick)
+        steady_timer(self, 0.1, self._tick)
         self.get_logger().info(f'logging to {self.rrd_path} (sink {sink})')
 
     def _start_viewer(self, sink: str, env: dict, viewer_port: int, web_port: int):

@@ -12,7 +12,7 @@ import time
 
 from rclpy.node import Node
 
-from sat_agent.ros.node_runner import finish_run, run_nodes
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.ros_params import declare_sat_params
 
 from sat_world_sim.records import RunCollector
@@ -32,7 +32,7 @@ class MetricsNode(Node):
         self.collector = RunCollector(agent_ids)
         self._finished_at = None
         self.ready = watch_run(self, agent_ids, self.collector.add)
-        self.create_timer(0.1, self._tick)
+        steady_timer(self, 0.1, self._tick)
 
     def _tick(self):
         if self.collector.final is None:

@@ -25,12 +25,12 @@ from rclpy.qos import QoSProfile
 from rosbags.rosbag2 import Reader
 
 from sat_agent.config import load_params_file, ParameterError, SatParams
+from sat_agent.ros.msg_conversions import message_class
 
-from sat_world_sim.bag_replay import raw_messages, replay_offline, selected
-from sat_world_sim.ros.replay_support import message_class, topic_qos
-from sat_world_sim.topics import Topic, world_topics
+from sat_world_sim.bag_replay import bag_agent_ids, raw_messages, replay_offline, selected
+from sat_world_sim.ros.replay_support import topic_qos
+from sat_world_sim.topics import graph_topics, Topic
 
-LATCHED = {t.name for t in world_topics()}
 REPLAY_DEPTH = 1000
 ACK_TIMEOUT_S = 10.0
 
@@ -65,9 +65,10 @@ def replay_live(bag: Path, rate: float, loop: bool, topics: Optional[Sequence[st
     try:
         with Reader(bag) as reader:
             connections = selected(reader, topics)
+            latched = {t.name for t in graph_topics(bag_agent_ids(reader)) if t.latched}
             publishers = {c.id: node.create_publisher(
                 message_class(c.msgtype), c.topic,
-                deep(topic_qos(Topic(c.topic, c.msgtype, c.topic in LATCHED))))
+                deep(topic_qos(Topic(c.topic, c.msgtype, c.topic in latched))))
                 for c in connections}
             _wait_for_subscribers(node, publishers.values(), match_timeout)
             while True:
