@@ -2,7 +2,8 @@
 
 Every module of sat_agent and sat_world_sim outside their ``ros/`` subpackages is parsed (ast)
 and must not import rclpy, a ``*_msgs`` or ``*_interfaces`` package, launch, or the ``ros/``
-adapters themselves, at module level or inside a function. The executables keep their names.
+adapters themselves, at module level or inside a function. The executables keep their names,
+each package.xml declares what its code imports, and `colcon test` runs the suite.
 """
 
 import ast
@@ -10,6 +11,7 @@ import configparser
 import re
 import subprocess
 import sys
+import xml.etree.ElementTree as ElementTree
 
 from conftest import REPO_ROOT
 
@@ -108,3 +110,43 @@ def test_colcon_test_runs_the_make_test_suite():
     setup_cfg = configparser.ConfigParser()
     setup_cfg.read(package / 'setup.cfg')
     assert 'tool:pytest' not in setup_cfg, 'a [tool:pytest] here would replace pytest.ini'
+
+
+# Python libraries by their rosdep keys; the pip-only ones have none and are named in a
+# package.xml comment instead (requirements.txt installs them).
+ROSDEP_KEYS = {'numpy': 'python3-numpy', 'scipy': 'python3-scipy', 'yaml': 'python3-yaml',
+               'matplotlib': 'python3-matplotlib', 'tqdm': 'python3-tqdm',
+               'pydantic': 'python3-pydantic'}
+PIP_ONLY = {'rosbags', 'rerun', 'ortools', 'dask', 'distributed'}
+ROS_PACKAGES = re.compile(r'^(rclpy|ament_index_python|launch|launch_ros|\w+_msgs|'
+                          r'\w+_interfaces)$')
+
+
+def imported_roots(package: str) -> set:
+    """Top-level modules the package's code (its Python package and launch files) imports."""
+    roots = set()
+    base = REPO_ROOT / 'src' / package
+    for path in [*(base / package).rglob('*.py'), *(base / 'launch').glob('*.py')]:
+        for node in ast.walk(ast.parse(path.read_text(encoding='utf-8'))):
+            if isinstance(node, ast.Import):
+                roots.update(alias.name.split('.')[0] for alias in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                roots.add(node.module.split('.')[0])
+    return roots - set(sys.stdlib_module_names) - {package}
+
+
+def test_each_package_xml_declares_what_its_code_imports():
+    for package in ('sat_agent', 'sat_world_sim'):
+        xml_path = REPO_ROOT / 'src' / package / 'package.xml'
+        root = ElementTree.parse(xml_path).getroot()
+        declared = {e.text for e in root if e.tag in ('depend', 'exec_depend')}
+        text = xml_path.read_text(encoding='utf-8')
+        for module in sorted(imported_roots(package)):
+            if module in PIP_ONLY:
+                assert module in text, f'{package}: name {module} in a package.xml comment'
+            elif module in ROSDEP_KEYS:
+                assert ROSDEP_KEYS[module] in declared, f'{package}: {ROSDEP_KEYS[module]}'
+            else:
+                assert ROS_PACKAGES.match(module) or module.startswith('sat_'), \
+                    f'{package} imports {module}: add it to package.xml and to this test'
+                assert module in declared, f'{package}: exec_depend {module}'
