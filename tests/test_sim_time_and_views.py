@@ -13,7 +13,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 import pytest
 import rclpy
-from ros_harness import executable, PARAMS, started
+from ros_harness import executable, PARAMS, run_swarm, started, write_scenario
 from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
 
@@ -94,11 +94,12 @@ def test_estimate_markers_are_two_sigma_ellipses_with_ids_after_a_delete_all():
     assert poses[0].orientation.z == pytest.approx(np.sin(np.pi / 4))
 
 
-def test_the_plan_path_starts_at_the_agent_and_truth_markers_draw_every_square():
-    path = views.plan_path((1.0, 2.0), [[5.0, 5.0], [15.0, 5.0]], header(2, DT))
+def test_the_plan_path_holds_the_walk_and_truth_markers_draw_every_square():
+    path = views.plan_path([[5.0, 5.0], [15.0, 5.0]], header(2, DT))
     assert [(p.pose.position.x, p.pose.position.y) for p in path.poses] == [
-        (1.0, 2.0), (5.0, 5.0), (15.0, 5.0)]
-    assert views.plan_path((1.0, 2.0), np.zeros((0, 2)), header(2, DT)).poses == []
+        (5.0, 5.0), (15.0, 5.0)]
+    assert all(p.header.stamp.sec == 2 and p.header.frame_id == 'map' for p in path.poses)
+    assert views.plan_path(np.zeros((0, 2)), header(2, DT)).poses == []
     markers = views.truth_markers([7], [[40.0, 50.0]], {1: (10.0, 60.0), 2: (60.0, 10.0)},
                                   (100.0, 100.0), 10.0, header(3, DT)).markers
     squares = next(m for m in markers if m.ns == 'world/squares')
@@ -150,11 +151,31 @@ def test_the_run_bag_holds_clock_and_views_with_step_stamps_and_frames(paper_run
     assert problems == []
     assert STANDARD <= set(counts)
     assert clock == [k * DT for k in range(1, 201)]
-    # One view of each kind per agent and step at the default rate (1 per second of sim time).
+    # One view of each kind per agent and step at the default rate (1 per second of sim time);
+    # the plan when it changed (a node visited, a new plan, TRACK).
     assert counts['nav_msgs/msg/OccupancyGrid'] == 2 * 200
-    assert counts['nav_msgs/msg/Path'] == 2 * 200
+    assert 2 * 5 <= counts['nav_msgs/msg/Path'] < 2 * 200
     assert counts['geometry_msgs/msg/PoseStamped'] == 2 * 2 * 200    # goal and pose
     assert set(AGENT_VIEWS.values()) <= set(counts)
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(300)
+def test_the_real_time_clock_publishes_the_same_sim_time(tmp_path):
+    scenario = write_scenario(
+        tmp_path / 'rt.yaml', name='real_time_clock', seed=2, steps=6, truth_process_noise=0.0,
+        agents=[{'id': 1, 'start': [10.0, 10.0]}])
+    code, _, output = run_swarm(tmp_path / 'run', scenario, '--clock', 'real_time', '--period',
+                                '0.3', '--view', 'none', '--quiet', timeout=240)
+    assert code == 0, output[-3000:]
+    with AnyReader([tmp_path / 'run' / 'bag'], default_typestore=sat_typestore()) as reader:
+        clock = [reader.deserialize(raw, c.msgtype).clock.sec
+                 for c, _, raw in reader.messages() if c.topic == '/clock']
+        grids = [reader.deserialize(raw, c.msgtype).header.stamp.sec
+                 for c, _, raw in reader.messages() if c.topic == '/agent_1/view/search_density']
+    assert clock == [1, 2, 3, 4, 5, 6]
+    # A late agent may miss a step in real time; whatever it publishes is stamped on /clock.
+    assert grids and set(grids) <= set(clock)
 
 
 @pytest.mark.ros

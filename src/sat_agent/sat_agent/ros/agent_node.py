@@ -19,7 +19,7 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
   controller; ``radio/out/*`` (pub, RADIO);
 - ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder;
 - ``view/*`` (pub, WORLD): the standard views (sat_agent.ros.views) every 1 / ``view_rate``
-  seconds of sim time.
+  seconds of sim time (the plan when it changed).
 
 Every header carries the step's sim time and a frame (sat_agent.stamps).
 
@@ -101,6 +101,7 @@ class AgentNode(Node):
         self._received_since_step = 0
         self._robot_pose = RobotPose(None, 0.0)
         self._last_view_step = None
+        self._last_plan = None
 
         self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP)
         self.goal_pub = self.create_publisher(PoseStamped, ROBOT_GOAL[0], STEP)
@@ -277,7 +278,9 @@ class AgentNode(Node):
                                                             lattice, stamp))
         pubs['estimates'].publish(views.estimate_markers(self.agent_id, output.estimate, stamp))
         pubs['estimate_poses'].publish(views.estimate_poses(output.estimate, stamp))
-        pubs['plan'].publish(views.plan_path(pose, output.plan, stamp))
+        if self._last_plan is None or not np.array_equal(output.plan, self._last_plan):
+            self._last_plan = output.plan
+            pubs['plan'].publish(views.plan_path(output.plan, stamp))
         pubs['pose'].publish(views.pose_stamped(pose, stamp, self._robot_pose.yaw))
 
     def _status(self, stamp, step: int, pose, output, compute_time: float) -> AgentStatus:
