@@ -53,8 +53,7 @@ from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage,
                                            measurements_from_msg, message_class, point,
-                                           RADIO_TYPES,
-                                           report_from_parts, report_to_msgs)
+                                           RADIO_TYPES, report_from_parts, report_to_msgs)
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.qos import RADIO, ROBOT, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
