@@ -71,7 +71,7 @@ def test_launch_defaults_are_the_bring_up_defaults():
     defaults = {name: value for name, value, _ in bringup.launch_arguments()}
     processes, env = launch.processes({**defaults, 'run_dir': 'runs/x'})
     assert processes == bringup.load_run(bringup.parse_args(['--run-dir', 'runs/x']))
-    assert env == bringup.run_env(bringup.parse_args([]))
+    assert env == {'FASTRTPS_DEFAULT_PROFILES_FILE': bringup.default_fastdds_profile()}
     # The scenario's seed goes to world_sim and to every agent.
     seeded = [p.name for p in processes if 'seed:=1' in p.ros_arguments]
     assert seeded == ['world_sim', 'agent_1', 'agent_2']

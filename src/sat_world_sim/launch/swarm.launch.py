@@ -23,7 +23,7 @@ from sat_world_sim import bringup
 def processes(values):
     """Return (processes, extra environment) for launch argument values (name -> string)."""
     options = bringup.options_from_launch(values)
-    return bringup.load_run(options), bringup.run_env(options)
+    return bringup.load_run(options), bringup.run_env(options.fastdds_profile, options.domain_id)
 
 
 def _nodes(context):

@@ -163,14 +163,14 @@ def default_fastdds_profile() -> str:
         Path(get_package_share_directory('sat_world_sim')) / 'config' / 'fastdds.xml')
 
 
-def run_env(options) -> Dict[str, str]:
+def run_env(fastdds_profile: str, domain_id: Optional[int]) -> Dict[str, str]:
     """Return what a run adds to its processes' environment, in the bring-up and the launch.
 
     The Fast DDS profile, and the ROS_DOMAIN_ID when one is given.
     """
-    env = {'FASTRTPS_DEFAULT_PROFILES_FILE': str(options.fastdds_profile)}
-    if options.domain_id is not None:
-        env['ROS_DOMAIN_ID'] = str(options.domain_id)
+    env = {'FASTRTPS_DEFAULT_PROFILES_FILE': str(fastdds_profile)}
+    if domain_id is not None:
+        env['ROS_DOMAIN_ID'] = str(domain_id)
     return env
 
 
@@ -181,9 +181,8 @@ def ros_env(domain_id: Optional[int], fastdds_profile: Optional[str] = None) -> 
     the user says otherwise, and Fast DDS gets fastdds_profile (default_fastdds_profile()).
     """
     env = dict(os.environ)
-    env.update(run_env(argparse.Namespace(
-        fastdds_profile=fastdds_profile or default_fastdds_profile(),
-        domain_id=domain_id if domain_id is not None else private_domain_id())))
+    env.update(run_env(fastdds_profile or default_fastdds_profile(),
+                       domain_id if domain_id is not None else private_domain_id()))
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
     env['PYTHONUNBUFFERED'] = '1'
@@ -333,12 +332,14 @@ def launch_arguments() -> List[Tuple[str, str, str]]:
     """
     arguments = []
     for action in build_parser()._actions:
-        if action.dest in SUPERVISION_OPTIONS or action.dest == 'help' or \
-                isinstance(action, argparse._StoreConstAction) and action.const == 'none':
+        alias = isinstance(action, argparse._StoreConstAction) and action.const == 'none'
+        if action.dest in SUPERVISION_OPTIONS or action.dest == 'help' or alias:
             continue
         default = action.default
-        text = '' if default is None else str(default).lower() if isinstance(default, bool) \
-            else str(default)
+        if default is None:
+            text = ''
+        else:
+            text = str(default).lower() if isinstance(default, bool) else str(default)
         arguments.append((action.dest, text, action.help or ''))
     return arguments
 
@@ -413,7 +414,8 @@ def main(argv=None) -> int:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
     if args.print_ros2_run:
-        print('\n'.join(ros2_run_lines(processes, run_env(options))))
+        env = run_env(options.fastdds_profile, options.domain_id)
+        print('\n'.join(ros2_run_lines(processes, env)))
         return 0
     env = ros_env(options.domain_id, options.fastdds_profile)
     agents = sum(p.executable == 'agent' for p in processes) or 'composed'
