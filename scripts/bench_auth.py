@@ -125,7 +125,7 @@ def main(argv=None) -> int:
           + '   sign/ser verify/ser')
     for name, msg, relayed in cases:
         f = measure(name, msg, relayed, args.repeat)
-        cells = ' '.join(f"{f[c]:12.1f} us" if c in f else f"{'-':>15s}" for c in columns)
+        cells = ' '.join(f'{f[c]:12.1f} us' if c in f else 15 * ' ' for c in columns)
         print(f"{name:28s} {f['bytes']:6d} {cells}   {f['sign'] / f['serialize']:8.2f} "
               f"{f['verify'] / f['serialize']:10.2f}")
     return 0

@@ -112,6 +112,11 @@ def test_a_payload_above_the_size_limit_is_refused_before_hashing(monkeypatch):
     refused(lambda: verifier(10).verify('/agent_2/cmd', data, max_bytes=500), 'too_large')
 
 
+def test_the_size_limit_holds_with_authentication_off_too():
+    refused(lambda: verifier(10, key=None).verify('/agent_2/cmd', bytes(600), max_bytes=500),
+            'too_large')
+
+
 # -- replays, senders, steps ----------------------------------------------------------------
 
 def test_a_replayed_or_older_message_is_refused_per_signer_and_channel():
@@ -155,6 +160,25 @@ def test_the_counter_increases_strictly_even_when_the_clock_stands_still_or_goes
 def test_a_sender_off_the_roster_is_refused_even_with_a_valid_signature():
     data = Signer(KEY, 99).sign('/agent_99/cmd', payload(), 10)
     refused(lambda: verifier(10).verify('/agent_99/cmd', data), 'unknown_sender')
+
+
+def test_a_channel_only_its_sender_may_sign_refuses_another_roster_member():
+    """E.g. scans: only world_sim signs /agent_1/measurements."""
+    forged = Signer(KEY, 2).sign('/agent_1/measurements', payload(), 10)
+    refused(lambda: verifier(10).verify('/agent_1/measurements', forged, sender=WORLD_SENDER),
+            'wrong_sender')
+    genuine = Signer(KEY, WORLD_SENDER).sign('/agent_1/measurements', payload(), 10)
+    assert verifier(10).verify('/agent_1/measurements', genuine, sender=WORLD_SENDER)
+
+
+def test_a_message_whose_fields_disagree_with_its_signature_is_refused():
+    v = verifier(10)
+    signed = v.verify('/agent_2/cmd', Signer(KEY, 2).sign('/agent_2/cmd', payload(), 10))
+    v.confirm(signed, step=10, sender=2)
+    refused(lambda: v.confirm(signed, step=11, sender=2), 'mismatch')
+    refused(lambda: v.confirm(signed, step=10, sender=3), 'mismatch')
+    v.confirm(None, step=99)     # authentication off: nothing to compare
+    assert v.refused == {'mismatch': 2}
 
 
 @given(known=st.integers(100, 10**6), offset=st.integers(-20, 20))

@@ -282,7 +282,8 @@ class MessageVerifier:
     are judged per (signer, channel): a counter not above the last one accepted there is
     refused. Every refusal raises AuthError and is counted in ``refused`` per reason; accepted
     messages are counted in ``accepted`` per channel. ``key`` None: authentication off, every
-    message is accepted (counted as ``unauthenticated``) and verify returns None.
+    message is accepted (counted as ``unauthenticated``) and verify returns None. world_sim,
+    which is the world, sets ``step`` itself at each step.
     """
 
     def __init__(self, key: Optional[bytes], senders: Collection[int], window: StepWindow):
@@ -298,16 +299,17 @@ class MessageVerifier:
     def enabled(self) -> bool:
         return self.key is not None
 
-    def verify(self, channel: str, data, relayed: bool = False,
+    def verify(self, channel: str, data, relayed: bool = False, sender: Optional[int] = None,
                max_bytes: Optional[int] = None) -> Optional[Signed]:
         """Check a message received on channel; return its Signed block or raise AuthError.
 
         relayed: the type ends with a relay seal after the sender's block (a radio/out message,
-        as the relay checks it; the seal is not looked at). max_bytes: refuse larger payloads
-        before any hashing.
+        as the relay checks it; the seal is not looked at). sender: the only id allowed to
+        sign on this channel (WORLD_SENDER for the world's topics, i for agent i's). max_bytes:
+        refuse larger payloads before any hashing (also with authentication off).
         """
         try:
-            return self._accept(channel, self._verify(channel, data, relayed, max_bytes))
+            return self._accept(channel, self._verify(channel, data, relayed, sender, max_bytes))
         except AuthError as error:
             self.refused[error.reason] += 1
             raise
@@ -328,25 +330,41 @@ class MessageVerifier:
             self.refused[error.reason] += 1
             raise
 
-    def _verify(self, channel: str, data, relayed: bool,
+    def confirm(self, signed: Optional[Signed], step: int, sender: Optional[int] = None):
+        """Check that the deserialized message says what its signature says, or raise AuthError.
+
+        step: the message's step field; sender: its sender id field, where it names one.
+        """
+        if signed is None:
+            return
+        if signed.step != step or (sender is not None and signed.sender != sender):
+            self.refused['mismatch'] += 1
+            raise AuthError('mismatch', f'signed by {signed.sender} for step {signed.step}, '
+                                        f'the message says {sender} and step {step}')
+
+    def _verify(self, channel: str, data, relayed: bool, sender: Optional[int],
                 max_bytes: Optional[int]) -> Optional[Signed]:
+        _check_size(channel, data, max_bytes)
         if self.key is None:
             return None
-        _check_size(channel, data, max_bytes)
         block, end = _layout(data, relayed)
-        return self._check(block, data, end, lambda _: channel, seal=False)
+        return self._check(block, data, end, lambda _: channel, seal=False, expected=sender)
 
     def _verify_delivery(self, channel, data, origin, max_bytes):
+        _check_size(channel, data, max_bytes)
         if self.key is None:
             return None, None
-        _check_size(channel, data, max_bytes)
         block, end = _layout(data, relayed=True)
-        seal = self._check(block, data, len(data), lambda _: channel, seal=True)
+        seal = self._check(block, data, len(data), lambda _: channel, seal=True,
+                           expected=WORLD_SENDER)
         return seal, self._check(block, data, end, origin, seal=False)
 
     def _check(self, block: struct.Struct, data, end: int, channel_of: Callable[[int], str],
-               seal: bool) -> Signed:
-        """Verify the block ending at `end` (a seal: the last one); return what it says."""
+               seal: bool, expected: Optional[int] = None) -> Signed:
+        """Verify the block ending at `end` (a seal: the last one); return what it says.
+
+        expected: the only signer allowed (a seal's is the radio's, WORLD_SENDER).
+        """
         counter, sender, step, mac = block.unpack_from(data, end - BLOCK_BYTES)
         what = 'seal' if seal else 'signature'
         if not any(mac):
@@ -354,14 +372,14 @@ class MessageVerifier:
         if sender not in self.senders:
             raise AuthError('unknown_sender',
                             f'{channel_of(sender)}: signed by {sender}, not on the roster')
-        if seal and sender != WORLD_SENDER:
-            raise AuthError('not_relayed', f'{channel_of(sender)}: sealed by {sender}, '
-                                           'not by the radio')
+        if expected is not None and sender != expected:
+            raise AuthError('not_relayed' if seal else 'wrong_sender',
+                            f'{channel_of(sender)}: {what} of {sender}, only {expected} may')
         view = memoryview(data)
         channel = channel_of(sender)
-        expected = _seal_mac(self.key, channel, view) if seal else \
+        expected_mac = _seal_mac(self.key, channel, view) if seal else \
             _sender_mac(self.key, channel, view, end)
-        if not hmac.compare_digest(mac, expected):
+        if not hmac.compare_digest(mac, expected_mac):
             raise AuthError('bad_signature', f'{channel}: the {what} of {sender} does not verify')
         return Signed(sender, step, counter)
 
