@@ -5,6 +5,7 @@ import pytest
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent
+from sat_agent.beyond_paper.investigation import keep_in_view_action
 from sat_agent.config import SatParams
 from sat_agent.mode_machine import Mode
 from sat_agent.search_map import nodes_in_view, unvisited_nodes
@@ -145,12 +146,13 @@ def target_measurements(target, rng):
     return measurements
 
 
-def hover_over_walking_target(steps):
+def hover_over_walking_target(steps, **additions):
     """Run an agent the world holds at (50, 50) for steps scans of a target walking past it.
 
-    Returns (params, pose, target(k), the agent, its outputs of steps 1..steps).
+    additions: switches of params.additions to set. Returns (params, pose, target(k), the
+    agent, its outputs of steps 1..steps).
     """
-    params = small_params()
+    params = small_params().with_overrides({f'additions.{k}': v for k, v in additions.items()})
     pose = np.array([50.0, 50.0])
     agent = Agent(1, params, pose, seed=4)
     target = (lambda k: np.array([52.0 + 0.3 * k, 51.0]))
@@ -188,6 +190,37 @@ def test_searching_agent_holds_its_walk_to_look_at_a_tentative_peak():
     quiet = [fresh.step(k, pose, NO_MEASUREMENTS, []) for k in range(1, 5)]
     assert not quiet[3].estimate.tentative
     np.testing.assert_allclose(quiet[3].goal, fresh.planner.next_goal())
+
+
+def test_investigation_switch_holds_the_walk_on_a_tentative_peak_or_follows_it():
+    _, pose, _, _, outputs = hover_over_walking_target(4)
+    assert outputs[3].mode == Mode.SEARCH and outputs[3].estimate.tentative
+    paper, _, _, agent, off = hover_over_walking_target(4, investigation=False)
+    # The same scans give the same tentative peak, but the paper's agent follows its walk.
+    np.testing.assert_allclose(off[3].estimate.tentative[0].position,
+                               outputs[3].estimate.tentative[0].position)
+    np.testing.assert_allclose(off[3].goal, agent.planner.next_goal())
+    assert off[3].action == search_action(pose, agent.planner.next_goal(), paper)
+    assert off[3].action != outputs[3].action
+
+
+def test_keep_in_view_action_keeps_a_point_inside_the_next_square():
+    params = SatParams()
+    inner = params.sensor.square_side / 2.0 - params.cooperation.track_edge_margin
+    poses = candidate_poses((50.0, 50.0), params.actions)
+    # A point 3 m behind the agent: the 4 m step east would leave it 7 m behind, outside the
+    # square; the 2 m step east keeps it 5 m behind, outside the inner square too. Of the
+    # actions that hold it, staying is the nearest to the goal.
+    behind = np.array([[47.0, 50.0]])
+    action = keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, behind)
+    assert action == 0 and search_action((50.0, 50.0), (60.0, 50.0), params) == 9
+    assert np.max(np.abs(poses[action] - behind[0])) <= inner
+    # A point ahead costs nothing: the free choice already holds it.
+    ahead = np.array([[55.0, 50.0]])
+    assert keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, ahead) == 9
+    # No action can hold a point 20 m away: the constraint is dropped.
+    far = np.array([[30.0, 50.0]])
+    assert keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, far) == 9
 
 
 def test_searching_agent_keeps_a_spot_seen_once_in_its_next_square_then_resumes_its_walk():
