@@ -4,7 +4,8 @@
 
 1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k with the
    extractor (state_extraction; it remembers what the next extraction needs);
-2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation");
+2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation"), each
+   predicted from its step to k first (search_density);
 3. tracking overlap: for every neighbour that, like this agent, was in TRACK at k-1, add the
    incremental score (Eqn. ospa) of the two agents' k-1 reports (poses s_{k-1} and predicted
    positions x + v T) to the window; leave TRACK when the window says overlap and this agent is
@@ -25,14 +26,14 @@ Agreeing on a joint plan without extra messages: every member of a group must co
 partition of the unvisited nodes. So a joint plan at step k is made only from the reports of
 step k-1 of all members, the agent's *own* k-1 report included (not its newer state): the
 starts are the members' k-1 poses and the node values come from the elementwise max of their
-k-1 search densities. The group is this agent plus the senders of the inbox's reports that were
-in SEARCH at k-1. Since radio range is symmetric, two agents in range see each other's k-1
-report at the same step and so see the same events: an agent joining S_k, the set of agents in
-SEARCH by the k-1 reports (first contact, meeting again, a return to SEARCH), or a member
-leaving SEARCH; both replan jointly at that step and compute identical node partitions
-independently. Replans that only one agent makes (own walk exhausted, own return to SEARCH) are
-made alone from its current state; leaving radio range does not replan (the members keep their
-walks of the joint plan, as in the paper).
+k-1 search densities, each predicted to k with its sender's pose. The group is this agent plus
+the senders of the inbox's reports that were in SEARCH at k-1. Since radio range is symmetric,
+two agents in range see each other's k-1 report at the same step and so see the same events: an
+agent joining S_k, the set of agents in SEARCH by the k-1 reports (first contact, meeting again,
+a return to SEARCH), or a member leaving SEARCH; both replan jointly at that step and compute
+identical node partitions independently. Replans that only one agent makes (own walk exhausted,
+own return to SEARCH) are made alone from its current state; leaving radio range does not
+replan (the members keep their walks of the joint plan, as in the paper).
 
 The components that implement additions to the paper are chosen once, here and in the
 components' constructors, from ``params.additions`` (beyond_paper/__init__.py lists them);
@@ -194,8 +195,8 @@ class Agent:
         """Run one step k (module docstring); inbox holds the neighbours' reports.
 
         Reports of step k-1 take part in everything; older ones (a radio with latency) only add
-        their search density: the fusion by max is right whatever the density's age, whereas
-        joint plans and the overlap test need the same step on every side.
+        their search density, predicted to k like every received density: joint plans and the
+        overlap test need the same step on every side.
         """
         pose = np.asarray(pose, dtype=float).reshape(2)
         measurements = np.asarray(measurements, dtype=float).reshape(-1, 2)
@@ -204,14 +205,14 @@ class Agent:
         self.filter.correct(measurements, pose)
         estimate = self.extractor.extract(self.filter.targets, pose)
         for report in late + reports:
-            self.filter.search.fuse(report.search_values)
+            self.filter.search.fuse(self._density_at(step, report))
         searchers = self._searchers(reports)
         was_tracking = self.modes.mode == Mode.TRACK
         leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
         mode = self.modes.update(len(estimate.targets), leaving_for is not None)
         replan = ReplanReason.NONE
         if mode == Mode.SEARCH and self.baseline is None:
-            replan = self._search_plan(pose, reports, searchers, resumed=was_tracking)
+            replan = self._search_plan(step, pose, reports, searchers, resumed=was_tracking)
         self._previous_searchers = searchers
         # The report carries the posterior (fused) density of step k, in float32 as on the wire,
         # so in-process and ROS runs exchange the very same values.
@@ -303,7 +304,7 @@ class Agent:
             members.append(own)
         return frozenset(r.agent_id for r in members)
 
-    def _search_plan(self, pose: np.ndarray, reports: Sequence[AgentReport],
+    def _search_plan(self, step: int, pose: np.ndarray, reports: Sequence[AgentReport],
                      searchers: frozenset, resumed: bool) -> ReplanReason:
         """Mark visited nodes and replan when needed (module docstring).
 
@@ -330,13 +331,18 @@ class Agent:
         if joint:
             members = [own] + searching
             starts = {r.agent_id: r.pose for r in members}
-            fused = np.maximum.reduce([r.search_values for r in members])
+            fused = np.maximum.reduce([self._density_at(step, r) for r in members])
             self.planner.plan(self.agent_id, starts, self.search_map_values(fused))
         else:
             self.planner.plan(self.agent_id, {self.agent_id: pose}, own_values)
         # The new walk may start with nodes already in view from s_k.
         self.planner.mark_visited(pose, own_values)
         return reason
+
+    def _density_at(self, step: int, report: AgentReport) -> np.ndarray:
+        """Return the report's search density predicted from its step to step (search_density)."""
+        return self._scratch.predicted(report.search_values, report.pose, step - report.step,
+                                       self.params.sensor, self.params.search.decay)
 
     def search_map_values(self, density_values: np.ndarray) -> np.ndarray:
         """Eqn. search_value of every search-map node for a (ny, nx) search density."""
