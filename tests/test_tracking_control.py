@@ -107,7 +107,7 @@ def test_score_equals_divergence_of_a_full_pseudo_update():
                                                rel=1e-9)
 
 
-def test_the_choice_keeps_the_target_at_the_stand_off_inside_the_square():
+def test_track_standoff_switch_keeps_the_target_at_the_stand_off_or_takes_the_pure_argmax():
     """Among the stand-off actions the Renyi score decides; the scores stay the Renyi ones."""
     target = POSE + np.array([0.5, 0.0])                 # next to the agent
     action, scores = CONTROL.action(_cloud(target, spread=0.8), _estimate(target), POSE)

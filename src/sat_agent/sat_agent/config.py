@@ -27,8 +27,11 @@ Two kinds of departure from the paper, kept apart:
   - the exchanged predicted states X-hat_{k|k-1} are the sender's k-1 estimates moved by
     x + v T, the peak means under the motion model (agent_core, tracking_overlap);
   - Eqn. pims only for the targets in u's square: p_D is 0 outside it (tracking_control);
-  - a node whose centre is in view is visited (the paper's "marked as visited"), so a plan
-    leaves out the nodes in view of its start (search_planning);
+  - a node whose centre is in view is visited (the paper's "marked as visited"): a new walk
+    drops the nodes in view at once, and an exhaustion replan leaves them out
+    (search_planning);
+  - xi_search is the distance from the pose an action leads to, to the next node (the paper's
+    "current position" would score every action alike) (search_planning);
   - when a walk is exhausted the agent plans a new one from where it is, alone; a joint plan
     is made at first contact, when a member leaves SEARCH and on a return to SEARCH, from the
     members' k-1 reports; leaving radio range keeps the joint walks (search_planning,
