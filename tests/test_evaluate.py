@@ -187,7 +187,7 @@ def test_quick_study_writes_rows_tables_readme_and_figures(tmp_path, capsys):
     assert '5 cells x 2 seeds = 10 runs of 15 steps' in printed.err
     tables = printed.out.strip()
     assert 'p < 0.01' in tables and '95 % CI' in tables
-    assert tables.count('(ref.)') == 3 * 5   # three settings' references, five metrics each
+    assert tables.count('(ref.)') == 3 * 6   # three settings' references, six metrics each
     assert readme.read_text() == (f'# Title\n{README_MARKERS[0]}\n{tables}\n'
                                   f'{README_MARKERS[1]}\nrest\n')
     assert tables in (out / 'evaluation_summary.md').read_text()

@@ -66,8 +66,9 @@ TARGET_COLUMNS = ('setting', 'label', 'seed', 'id', 'born', 'died', 'first_in_vi
                   'first_detected', 'detection_delay', 'time_to_detection')
 METRIC_WORDS = ('ospa', 'time', 'pct', 'detect', 'bytes', 'msgs', 'steps', 'tracked', 'dup',
                 'share', 'wall', 'false', 'ceiling')
-# Threads of the numerical libraries in each worker: runs are parallel across processes, and
-# OpenBLAS's own threads on top of them made a run ~1.3x costlier in CPU and ~2x in wall time.
+# Threads of the numerical libraries in each worker (unless set already): runs are parallel
+# across processes, and OpenBLAS's own threads on top of them made a run ~1.2x costlier in CPU
+# and ~1.4-2x in wall time (random default, seeds 1-3, one process on 2 cores).
 SINGLE_THREAD = dict.fromkeys(('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS'), '1')
 
 
@@ -164,7 +165,8 @@ def estimate(cells: Sequence[Cell], seeds: int, jobs: int, cost) -> Tuple[int, O
 def executor(scheduler: Optional[str], jobs: int) -> Iterator:
     """Yield a concurrent.futures executor: a process pool, a Dask LocalCluster or a cluster."""
     if scheduler is None:
-        os.environ.update(SINGLE_THREAD)   # read by the spawned workers' numpy at import
+        for name, value in SINGLE_THREAD.items():   # read by the spawned workers' numpy
+            os.environ.setdefault(name, value)
         with ProcessPoolExecutor(max_workers=jobs,
                                  mp_context=multiprocessing.get_context('spawn')) as pool:
             yield pool

@@ -38,7 +38,8 @@ SUMMARY = (('OSPA (m)', 'mean_ospa', 1.0, 2), ('loc. (m)', 'mean_ospa_loc', 1.0,
            ('msgs/agent/step', 'radio_msgs_per_agent_step', 1.0, 2),
            ('kB/agent/step', 'bytes_per_agent_step', 1e-3, 1),
            ('CPU s/run', 'cpu_time_s', 1.0, 1))
-MAIN = (('detected %', 'detected_share', 100.0, 0), ('OSPA (m)', 'mean_ospa', 1.0, 2),
+MAIN = (('detected %', 'detected_share', 100.0, 0), ('entered %', 'entered_share', 100.0, 0),
+        ('OSPA (m)', 'mean_ospa', 1.0, 2),
         ('tracked %', 'tracked_share', 100.0, 0),
         ('searched % k=100', 'searched_pct_100', 1.0, 0),
         ('false-track steps', 'false_track_steps', 1.0, 1))
