@@ -33,15 +33,19 @@ oracle sweep per team size (it neither hears clutter nor uses the radio).
 Designs (``DESIGNS``): ``default`` is what ``make evaluate`` runs, chosen to fit 45 minutes on
 2 cores with 50 seeds per cell; ``full`` adds what did not fit; ``factorial`` is the full
 factorial. ``--only SETTING/LABEL`` picks cells from all of them. Measured CPU seconds per
-200-step run (seeds 1-4, evaluation.csv's ``cpu_time_s``, the machine shared): SAT-PHD 2.8 at
-the paper setting, 2.1 at paper_random, 5.9 at random (lawnmower, random walk, no radio
-1.9-6.4; OR-Tools walks 3.1 and 9.7; 8 agents 12.8; the oracle sweep 0.1). The default design:
-at paper, cooperative, strict and oracle; at paper_random, every policy cell and the ablation;
-at random, every policy cell; each without OR-Tools walks. Counting issue 15's three cells
-per setting and 7 additions at SAT-PHD's cost, that is ~83 CPU s per seed, 50 seeds on 2
-cores ~35 min (~25 min before issue 15's cells exist). Not in it, reachable with ``--design
-full`` or ``--only``: OR-Tools walks (+5 min), the paper setting's other policies, the
-ablation at paper and random (+17 min at random) and the sweeps (+18 min).
+200-step run (evaluation.csv's ``cpu_time_s``, seeds 1-4, with the core of issue 14's
+additions; the machine shared, so ±20 %): SAT-PHD 2.7 at the paper setting, 2.1 at
+paper_random, 6-7 at random; the strict profile and the ablation cells like SAT-PHD
+(1.7-2.3 at paper_random); lawnmower, random walk and no radio 2.2-2.5 and 4.3-7.3;
+OR-Tools walks 3.1 and 9.7; 8 agents 12.8; the oracle sweep 0.1. The default design: at
+paper, cooperative, strict and oracle; at paper_random, every policy cell and the ablation
+(10 additions); at random, every policy cell; each without OR-Tools walks. That is ~70 CPU s
+per seed, 50 seeds on 2 cores ~29 min, and ~40 min once issue 15's three cells per setting
+exist (counted at SAT-PHD's cost; ``evaluate --dry-run`` prints the estimate from the last
+study's costs). Not in it, reachable with ``--design full`` or ``--only``: OR-Tools walks
+(+5 min), the paper setting's other policies, the ablation at paper and random (+22 min at
+random) and the sweeps (+18 min); should issue 15's cells cost more than counted, the next
+to move there are the random walk and no-radio cells at paper_random (-2 min).
 
 Cells that cannot be built on this checkout (a profile file that does not exist yet, a policy
 or parameter the core does not know yet) are skipped with a message, not an error
