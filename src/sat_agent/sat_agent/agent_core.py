@@ -159,7 +159,8 @@ class Agent:
     """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
 
     Same constructor arguments and same step inputs give the same outputs: the only randomness
-    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id).
+    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id), and a
+    random baseline's, seeded with (seed, agent_id, its stream) (baselines/interface.py).
     """
 
     def __init__(self, agent_id: int, params: SatParams, initial_pose, seed: int = 0):
