@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Run the Monte Carlo evaluation (sat_world_sim/evaluate.py); `make evaluate` runs this.
 
-Usage: scripts/with_env.sh python scripts/evaluate.py [--seeds N] [--jobs N] [--out DIR] [--quick]
+Usage: scripts/with_env.sh python scripts/evaluate.py [--design default|full|factorial]
+       [--only SETTING/LABEL ...] [--seeds N] [--first-seed N] [--jobs N]
+       [--scheduler local|tcp://HOST:PORT] [--out DIR] [--quick | --steps N] [--dry-run]
 """
 
 import sys

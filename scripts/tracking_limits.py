@@ -82,7 +82,7 @@ def peaks_seen(params: SatParams, seed: int, steps: int):
 
 def trigger_rates(params: SatParams, seeds: int, steps: int = 30) -> dict:
     """{(threshold, scans in a row): (seeds whose target is marked, % of scans with clutter)}."""
-    looks_off = params.with_overrides({'search': {'investigate_steps': 0},
+    looks_off = params.with_overrides({'additions': {'investigation': False},
                                        'phd': {'tentative_threshold': min(THRESHOLDS)}})
     marked = {(m, n): 0 for m in THRESHOLDS for n in (1, 2)}
     false_scans = dict.fromkeys(marked, 0)

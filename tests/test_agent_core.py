@@ -5,8 +5,10 @@ import pytest
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent
+from sat_agent.beyond_paper.investigation import keep_in_view_action
 from sat_agent.config import SatParams
 from sat_agent.mode_machine import Mode
+from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import nodes_in_view, unvisited_nodes
 from sat_agent.search_planning import joint_plan, ReplanReason, search_action
 from sat_agent.sensor_model import measure
@@ -57,8 +59,11 @@ def test_two_agents_coming_into_range_fuse_densities_and_compute_the_same_joint_
     for a in agents:
         assert np.all(out[a].report.search_values >= reports[3 - a].search_values * 0.999 - 1e-6)
         assert np.all(out[a].report.search_values >= reports[a].search_values * 0.999 - 1e-6)
-    # The partition each computed alone is the joint plan of the two step-6 reports.
-    fused = np.maximum(reports[1].search_values, reports[2].search_values)
+    # The partition each computed alone is the joint plan of the two step-6 reports, their
+    # densities predicted to step 7 with their senders' poses.
+    density = SearchDensity(agents[1].filter.search.lattice)
+    fused = np.maximum(*(density.predicted(r.search_values, r.pose, 1, params.sensor,
+                                           params.search.decay) for r in reports.values()))
     node_values = agents[1].search_map_values(fused)
     nodes = unvisited_nodes(node_values, params.search.unvisited_threshold)
     expected = joint_plan({a: reports[a].pose for a in agents}, agents[1].search_map.centers,
@@ -113,13 +118,16 @@ def agent_and_neighbour_report(neighbour_pose):
     return agent, report
 
 
-def test_late_reports_only_add_their_density():
+def test_late_reports_only_add_their_density_predicted_to_the_step():
     agent, late = agent_and_neighbour_report((20.0, 20.0))
     agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [])
-    # A report of step 1 read at step 3 (two steps of radio latency).
+    # A report of step 1 read at step 3 (two steps of radio latency): its square, seen at
+    # step 1, held 1 at step 2 (Eqn. satphd_predict keeps the previous square) and J at 3.
     out = agent.step(3, (50.0, 50.0), NO_MEASUREMENTS, [late])
-    assert np.all(out.report.search_values >= late.search_values * 0.999 - 1e-6)
-    assert late.search_values.max() == 1.0
+    square = late.search_values == 1.0
+    assert square.sum() == 100
+    np.testing.assert_allclose(out.report.search_values[square], agent.params.search.decay,
+                               rtol=1e-6)
     assert out.replan != ReplanReason.NEW_NEIGHBOUR and agent.planner.group == {1}
     assert agent.dropped_reports == 0
 
@@ -145,12 +153,13 @@ def target_measurements(target, rng):
     return measurements
 
 
-def hover_over_walking_target(steps):
+def hover_over_walking_target(steps, **additions):
     """Run an agent the world holds at (50, 50) for steps scans of a target walking past it.
 
-    Returns (params, pose, target(k), the agent, its outputs of steps 1..steps).
+    additions: switches of params.additions to set. Returns (params, pose, target(k), the
+    agent, its outputs of steps 1..steps).
     """
-    params = small_params()
+    params = small_params().with_overrides({f'additions.{k}': v for k, v in additions.items()})
     pose = np.array([50.0, 50.0])
     agent = Agent(1, params, pose, seed=4)
     target = (lambda k: np.array([52.0 + 0.3 * k, 51.0]))
@@ -188,6 +197,37 @@ def test_searching_agent_holds_its_walk_to_look_at_a_tentative_peak():
     quiet = [fresh.step(k, pose, NO_MEASUREMENTS, []) for k in range(1, 5)]
     assert not quiet[3].estimate.tentative
     np.testing.assert_allclose(quiet[3].goal, fresh.planner.next_goal())
+
+
+def test_investigation_switch_holds_the_walk_on_a_tentative_peak_or_follows_it():
+    _, pose, _, _, outputs = hover_over_walking_target(4)
+    assert outputs[3].mode == Mode.SEARCH and outputs[3].estimate.tentative
+    paper, _, _, agent, off = hover_over_walking_target(4, investigation=False)
+    # The same scans give the same tentative peak, but the paper's agent follows its walk.
+    np.testing.assert_allclose(off[3].estimate.tentative[0].position,
+                               outputs[3].estimate.tentative[0].position)
+    np.testing.assert_allclose(off[3].goal, agent.planner.next_goal())
+    assert off[3].action == search_action(pose, agent.planner.next_goal(), paper)
+    assert off[3].action != outputs[3].action
+
+
+def test_keep_in_view_action_keeps_a_point_inside_the_next_square():
+    params = SatParams()
+    inner = params.sensor.square_side / 2.0 - params.cooperation.track_edge_margin
+    poses = candidate_poses((50.0, 50.0), params.actions)
+    # A point 3 m behind the agent: the 4 m step east would leave it 7 m behind, outside the
+    # square; the 2 m step east keeps it 5 m behind, outside the inner square too. Of the
+    # actions that hold it, staying is the nearest to the goal.
+    behind = np.array([[47.0, 50.0]])
+    action = keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, behind)
+    assert action == 0 and search_action((50.0, 50.0), (60.0, 50.0), params) == 9
+    assert np.max(np.abs(poses[action] - behind[0])) <= inner
+    # A point ahead costs nothing: the free choice already holds it.
+    ahead = np.array([[55.0, 50.0]])
+    assert keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, ahead) == 9
+    # No action can hold a point 20 m away: the constraint is dropped.
+    far = np.array([[30.0, 50.0]])
+    assert keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, far) == 9
 
 
 def test_searching_agent_keeps_a_spot_seen_once_in_its_next_square_then_resumes_its_walk():
@@ -271,3 +311,61 @@ def test_actions_are_admissible_at_the_border(pose):
         nxt = candidate_poses(poses[1], params.actions)[out.action]
         assert 0.0 <= nxt[0] <= 100.0 and 0.0 <= nxt[1] <= 100.0
         poses[1] = nxt
+
+
+def square_walk(rows):
+    """Poses jumping one sensing square (11 m) per step along the given rows of y, then holding.
+
+    Each cell under a jump is seen at one step only (the squares do not touch).
+    """
+    poses = [np.array([5.5 + 11.0 * i, y]) for y in rows for i in range(9)]
+    return lambda k: poses[min(k, len(poses)) - 1]
+
+
+def test_two_agents_in_range_age_a_cell_seen_once_as_a_lone_agent_does():
+    """Fusion ages correctly (issue 14): two agents in range for 200 steps against lone agents.
+
+    Each received density is predicted to the receiver's step before the max. A cell seen at
+    step t only holds 1 in the posterior of t and, by Eqn. satphd_predict (a cell in the
+    previous pose's square keeps its value), still 1 at t + 1; then it decays by J per step:
+    J^(k-t-1) at every k > t. The issue writes J^(k-t): it counts the prediction to t + 1 as a
+    decay, which the paper's recursion does not. Agent 1 and a lone twin sweep the lower rows,
+    agent 2 and its twin the upper rows, each cell under a jump seen at one step only; the pair
+    exchanges reports every step (in range). For a cell only one of them saw, both agents of the
+    pair hold the lone agent's value at every k > t (the neighbour learns it one step late).
+    """
+    params = small_params()
+    J = params.search.decay
+    walks = {1: square_walk([5.5, 16.5, 27.5, 38.5]), 2: square_walk([60.5, 71.5, 82.5, 93.5])}
+    pair = {a: Agent(a, params, walks[a](1), seed=1) for a in walks}
+    lone = {a: Agent(a, params, walks[a](1), seed=1) for a in walks}
+    lattice = pair[1].filter.search.lattice
+    centers = lattice.centers()
+    seen = {a: np.zeros((201, len(centers)), dtype=bool) for a in walks}    # [k, cell]
+    values = {name: np.zeros((201, len(centers))) for name in ('pair1', 'pair2', 'lone1', 'lone2')}
+    reports = {}
+    for k in range(1, 201):
+        out = {a: pair[a].step(k, walks[a](k), NO_MEASUREMENTS,
+                               [reports[b]] if b in reports else [])
+               for a, b in ((1, 2), (2, 1))}
+        reports = {a: o.report for a, o in out.items()}
+        for a in walks:
+            alone = lone[a].step(k, walks[a](k), NO_MEASUREMENTS, [])
+            values[f'lone{a}'][k] = alone.report.search_values.ravel()
+            values[f'pair{a}'][k] = out[a].report.search_values.ravel()
+            seen[a][k] = np.all(np.abs(centers - walks[a](k)) <= 5.0, axis=1)
+    for a, other in ((1, 2), (2, 1)):
+        once = (seen[a].sum(axis=0) == 1) & ~seen[other].any(axis=0)
+        cells = np.flatnonzero(once)
+        assert len(cells) > 3000, 'both sweeps see most of their cells once'
+        first = np.argmax(seen[a][:, cells], axis=0)                     # t of each cell
+        for k in range(2, 201):
+            later = first < k
+            age = np.maximum(k - first[later] - 1, 0)
+            expected = J ** age
+            np.testing.assert_allclose(values[f'lone{a}'][k, cells[later]], expected, rtol=1e-6)
+            # float32 on the wire: each hop rounds, and the max keeps the upward roundings.
+            for name in ('pair1', 'pair2'):
+                np.testing.assert_allclose(values[name][k, cells[later]], expected, rtol=1e-5)
+    # The issue's figure: after 200 steps the cells swept at the start have aged in both.
+    assert values['pair2'][200, np.flatnonzero(seen[1][1])].max() < J ** 190

@@ -1,11 +1,13 @@
 """Parameters: the paper's defaults; refusals name the key, the value and what is allowed."""
 
+from dataclasses import fields
 import math
 
 from conftest import REPO_ROOT
 import pytest
 
-from sat_agent.config import load_params_file, ParameterError, read_yaml, SatParams
+from sat_agent.config import (AdditionsParams, load_params_file, ParameterError, read_yaml,
+                              SatParams)
 
 
 def test_paper_yaml_is_the_documented_defaults():
@@ -19,6 +21,15 @@ def test_paper_yaml_is_the_documented_defaults():
         2.0, 2, 8) and params.actions.count == 17
     assert params.search.decay == 0.999 and params.cooperation.comm_range == 50.0
     assert params.cooperation.renyi_alpha == 0.5
+
+
+def test_the_strict_profile_is_the_default_with_every_addition_off():
+    strict = load_params_file(REPO_ROOT / 'config' / 'paper_strict.yaml')
+    switches = [item.name for item in fields(AdditionsParams)]
+    assert len(switches) >= 7 and all(getattr(SatParams().additions, name) for name in switches)
+    assert not any(getattr(strict.additions, name) for name in switches)
+    assert strict == SatParams().with_overrides({f'additions.{name}': False
+                                                 for name in switches})
 
 
 def test_nested_and_dotted_keys_agree():
@@ -36,6 +47,15 @@ def test_nested_and_dotted_keys_agree():
     ({'sensor.range': 3}, "unknown parameter(s) ['sensor.range']: allowed are"),
     ({'radar': {'x': 1}}, "unknown parameter group(s) ['radar']"),
     ({'cooperation.renyi_alpha': 1.0}, "'cooperation.renyi_alpha' = 1.0: allowed range is (0, 1)"),
+    ({'additions.confirmation': 'no'}, "'additions.confirmation' = 'no': must be true or false"),
+    ({'additions.investigation': 0}, "'additions.investigation' = 0: must be true or false"),
+    # A tunable of an addition cannot switch it off: only its switch can.
+    ({'search.investigate_steps': 0}, "'search.investigate_steps' = 0: allowed range is [1,"),
+    ({'phd.confirm_scans': 1}, "'phd.confirm_scans' = 1: allowed range is [2,"),
+    ({'phd.extraction_margin': 0}, "'phd.extraction_margin' = 0.0: allowed range is (0,"),
+    ({'search.revisit_share': 0}, "'search.revisit_share' = 0.0: allowed range is (0,"),
+    ({'cooperation.rejoin_cooldown': 0}, "'cooperation.rejoin_cooldown' = 0: allowed range is"),
+    ({'cooperation.track_standoff': 0}, "'cooperation.track_standoff' = 0.0: allowed range is"),
 ])
 def test_bad_values_are_refused_by_name(values, message):
     with pytest.raises(ParameterError) as refused:

@@ -100,6 +100,27 @@ def test_evaluation_summary_of_the_hand_checked_run():
     assert summary['bytes_per_agent_step'] == pytest.approx(32.0)
 
 
+def test_false_tracks_are_estimates_assigned_to_no_target():
+    metrics = compute_metrics(small_run(), 'tiny', 9)
+    # Step 3: agent 2's (70, 70) is 50 m from the only target; step 5: agent 1 reports a
+    # target after it died. Step 4's estimate is 3 m from the target: a true track.
+    assert [s['n_false'] for s in metrics['steps']] == [0, 0, 1, 0, 1]
+    assert metrics['summary']['false_track_steps'] == 2
+    # Two estimates near one target from one agent: one is assigned, the other is false.
+    two = compute_metrics([record(1, [[50.0, 50.0]], {1: (50.0, 50.0)},
+                                  {1: [[50.0, 51.0], [51.0, 50.0]]}, {1: 'TRACK'})], 's', 1)
+    assert two['steps'][0]['n_false'] == 1 and two['steps'][0]['n_tracked'] == 1
+
+
+def test_entered_share_counts_targets_that_were_ever_in_a_square():
+    assert compute_metrics(small_run(), 'tiny', 9)['summary']['entered_share'] == 1.0
+    # Target 0 passes the agent's square at step 2, never detected; target 1 stays far.
+    records = [record(k, [[10.0 + 20 * (k - 2) ** 2, 10.0], [90.0, 90.0]], {1: (10.0, 10.0)},
+                      {1: []}, {1: 'SEARCH'}, ids=[0, 1]) for k in (1, 2, 3)]
+    summary = compute_metrics(records, 's', 1)['summary']
+    assert summary['entered_share'] == 0.5 and summary['detected_share'] == 0.0
+
+
 def test_two_agents_near_one_target_are_a_duplicate():
     records = [record(k, [[50.0, 50.0]], {1: (50, 50), 2: (52, 50)},
                       {1: [[50.0, 51.0]], 2: [[50.0, 49.0]] if k > 1 else []},

@@ -53,10 +53,16 @@ def test_overlap_leaver_searches_at_once_and_ignores_targets_during_the_cooldown
     assert machine.update(1, False) == Mode.TRACK and machine.switched
 
 
+def test_rejoin_cooldown_switch_off_tracks_again_on_the_next_estimate():
+    machine = tracking_machine(PARAMS.with_overrides({'additions.rejoin_cooldown': False}))
+    assert machine.update(1, True) == Mode.SEARCH and machine.cooldown_left == 0
+    assert machine.update(1, False) == Mode.TRACK and machine.switched
+
+
 def test_cooldown_can_be_set_and_leave_is_ignored_in_search():
-    machine = tracking_machine(PARAMS.with_overrides({'cooperation.rejoin_cooldown': 0}))
+    machine = tracking_machine(PARAMS.with_overrides({'cooperation.rejoin_cooldown': 2}))
     machine.update(1, True)
-    assert machine.update(1, False) == Mode.TRACK
+    assert [machine.update(1, False) for _ in range(3)] == [Mode.SEARCH] * 2 + [Mode.TRACK]
     searching = ModeMachine(PARAMS.with_overrides({'cooperation.rejoin_cooldown': 3}))
     assert searching.update(0, True) == Mode.SEARCH and searching.cooldown_left == 0
 

@@ -229,6 +229,20 @@ def test_newborns_the_next_square_misses_are_dropped():
     assert sat.targets.weights[near_old_square].sum() < params.phd.birth_rate
 
 
+def test_newborn_gate_switch_off_keeps_the_newborns_the_next_square_misses():
+    params = SatParams().with_overrides({'additions.newborn_gate': False})
+    sat = SatPhdFilter(params, np.random.default_rng(8))
+    sat.correct(np.array([[2.0, 0.0]]), POSE)
+    born = sat.pending_births.mass
+    sat.predict(POSE)
+    sat.correct(np.zeros((0, 2)), POSE + np.array([30.0, 0.0]))
+    near_old_square = np.abs(sat.targets.states[:, [0, 2]] - POSE).max(axis=1) < 8
+    # Resampling keeps the mass: the newborns are all there (plus a little uniform birth mass).
+    assert sat.targets.weights[near_old_square].sum() == pytest.approx(
+        born, abs=params.phd.birth_rate)
+    assert born > 10 * params.phd.birth_rate
+
+
 @settings(max_examples=30, deadline=None)
 @given(mass=st.floats(0.01, 30.0), n=st.integers(1, 4000), seed=st.integers(0, 1000))
 def test_resampling_keeps_mass_and_respects_budget(mass, n, seed):

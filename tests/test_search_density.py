@@ -78,6 +78,26 @@ def test_cells_seen_from_the_previous_pose_do_not_decay():
     assert _cell_value(density, pose) == pytest.approx(J)
 
 
+@pytest.mark.parametrize('steps', [1, 2, 5])
+def test_a_density_of_steps_ago_is_predicted_with_its_pose_then_decays_by_j(steps):
+    density, theirs = _density(), _density()
+    rng = np.random.default_rng(7)
+    theirs.values[:] = rng.random(theirs.values.shape)
+    pose = np.array([30.0, 70.0])
+    before = theirs.values.copy()
+    ahead = density.predicted(theirs.values, pose, steps, SENSOR, J)
+    np.testing.assert_array_equal(theirs.values, before)
+    # One step of Eqn. satphd_predict at the pose of its step, then J per further step.
+    theirs.predict(pose, SENSOR, J)
+    np.testing.assert_allclose(ahead, theirs.values * J ** (steps - 1), rtol=1e-12)
+    square = np.zeros(before.shape, dtype=bool)
+    square[65:75, 25:35] = True
+    np.testing.assert_allclose(ahead[square], before[square] * J ** (steps - 1), rtol=1e-12)
+    np.testing.assert_allclose(ahead[~square], before[~square] * J ** steps, rtol=1e-12)
+    with pytest.raises(ValueError, match='steps >= 1'):
+        density.predicted(before, pose, 0, SENSOR, J)
+
+
 def test_node_value_is_the_mean_over_the_region():
     density = _density()
     density.values[:, :] = 0.0

@@ -132,24 +132,6 @@ def test_search_action_ties_go_to_the_lowest_action():
     assert search_action((50.0, 50.0), (53.0, 50.0), PARAMS) == 1
 
 
-def test_search_action_keeps_a_point_to_hold_inside_the_next_square():
-    inner = PARAMS.sensor.square_side / 2.0 - PARAMS.cooperation.track_edge_margin
-    poses = candidate_poses((50.0, 50.0), PARAMS.actions)
-    # A point 3 m behind the agent: the 4 m step east would leave it 7 m behind, outside the
-    # square; the 2 m step east keeps it 5 m behind, outside the inner square too. Of the
-    # actions that hold it, staying is the nearest to the goal.
-    behind = np.array([[47.0, 50.0]])
-    action = search_action((50.0, 50.0), (60.0, 50.0), PARAMS, keep_in_view=behind)
-    assert action == 0
-    assert np.max(np.abs(poses[action] - behind[0])) <= inner
-    # A point ahead costs nothing: the free choice already holds it.
-    ahead = np.array([[55.0, 50.0]])
-    assert search_action((50.0, 50.0), (60.0, 50.0), PARAMS, keep_in_view=ahead) == 9
-    # No action can hold a point 20 m away: the constraint is dropped.
-    far = np.array([[30.0, 50.0]])
-    assert search_action((50.0, 50.0), (60.0, 50.0), PARAMS, keep_in_view=far) == 9
-
-
 def test_search_action_never_leaves_the_area_at_a_corner():
     # The goal lies beyond the corner: the 4 m diagonal step would leave the area, the 2 m
     # diagonal step (action 6, angle 225 degrees) is the nearest admissible pose.
@@ -181,8 +163,8 @@ def fresh_values():
     return np.zeros(MAP.size)
 
 
-def planned(own_id=1, starts=None, values=None):
-    planner = SearchPlanner(MAP, PARAMS)
+def planned(own_id=1, starts=None, values=None, params=PARAMS):
+    planner = SearchPlanner(MAP, params)
     starts = starts or {own_id: (10.0, 60.0)}
     assert planner.needs_replan(frozenset(starts), False) == ReplanReason.NO_PLAN
     planner.plan(own_id, starts, fresh_values() if values is None else values)
@@ -217,6 +199,17 @@ def test_planner_drops_nodes_searched_by_others_when_given_fused_values():
     values[[50, 51]] = 0.8
     planner.mark_visited((-50.0, -50.0), values)
     assert len(planner.walk) == 98 and not {50, 51} & set(planner.walk)
+
+
+def test_drop_searched_nodes_switch_off_keeps_nodes_others_searched_in_the_walk():
+    paper = PARAMS.with_overrides({'additions.drop_searched_nodes': False})
+    planner = planned(params=paper)
+    values = fresh_values()
+    values[[50, 51]] = 0.8
+    assert planner.mark_visited((-50.0, -50.0), values).size == 0
+    assert len(planner.walk) == 100
+    # Only its own visits leave the walk.
+    assert sorted(planner.mark_visited(MAP.centers[50]).tolist()) == [50]
 
 
 def test_planner_goes_back_to_its_start_when_its_walk_is_exhausted_and_then_replans():
@@ -301,6 +294,28 @@ def test_exhaustion_replan_is_solo_and_leaves_the_other_members_claims_alone():
     assert sorted(planner.walk) == sorted(set(others) - in_view)
 
 
+def test_exhaustion_claims_switch_off_plans_over_the_other_members_nodes_too():
+    starts = {1: (10.0, 60.0), 2: (60.0, 10.0)}
+    paper = PARAMS.with_overrides({'additions.exhaustion_claims': False})
+    walks, owns = {}, {}
+    for name, params in (('claims', PARAMS), ('paper', paper)):
+        planner = planned(1, starts, params=params)
+        own = owns[name] = list(planner.walk)     # the same joint plan either way
+        searched = fresh_values()
+        searched[own] = 1.0
+        planner.mark_visited((10.0, 60.0), searched)
+        assert planner.needs_replan(frozenset({1, 2}), False) == ReplanReason.EXHAUSTED
+        decayed = fresh_values()
+        decayed[own[3:]] = 1.0      # three own nodes due again, agent 2's share unsearched
+        planner.plan(1, {1: (30.0, 30.0), 2: (60.0, 10.0)}, decayed)
+        walks[name] = set(planner.walk)
+    in_view = set(nodes_in_view(MAP, (30.0, 30.0), PARAMS.sensor.square_side).tolist())
+    others = set(ALL_NODES) - set(own)
+    assert owns['claims'] == owns['paper']
+    assert walks['claims'] == set(own[:3]) - in_view
+    assert walks['paper'] == (set(own[:3]) | others) - in_view
+
+
 def test_an_agent_short_of_a_nodes_far_edge_does_not_replan_that_node_forever():
     # The last node's centre came into view 4.8 m away, so the strip beyond the square's edge
     # keeps the node's search value below beta (paper scenario, agent 2 from k = 143). Planning
@@ -369,3 +384,18 @@ def test_with_every_node_searched_the_agent_revisits_the_least_searched_ones():
     searched[walk[0]] = 1.0
     planner.mark_visited((500.0, 500.0), searched)
     assert walk[0] not in planner.walk and len(planner.walk) == len(walk) - 1
+
+
+def test_revisit_fallback_switch_off_plans_no_node_and_holds_while_none_is_below_beta():
+    paper = SatParams().with_overrides({'additions.revisit_fallback': False})
+    planner = SearchPlanner(MAP, paper)
+    values = np.linspace(0.6, 1.0, MAP.size)    # all above beta: V-bar is empty
+    planner.needs_replan(frozenset({1}), released=False)
+    assert planner.plan(1, {1: (50.0, 50.0)}, values) == []
+    # The closed walk over no node is s_k: the agent holds (action 0 stays).
+    action, goal, plan = planner.choose((50.0, 50.0))
+    assert action == 0 and np.allclose(goal, (50.0, 50.0)) and plan.tolist() == [[50.0, 50.0]]
+    # It plans again at the next step and then takes the node that decayed below beta.
+    assert planner.needs_replan(frozenset({1}), released=False) == ReplanReason.EXHAUSTED
+    values[7] = 0.5
+    assert planner.plan(1, {1: (50.0, 50.0)}, values) == [7]

@@ -9,9 +9,10 @@ from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD, update_weights
 from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
 from sat_agent.tracking_control import (predicted_ideal_measurements, renyi_divergence,
-                                        tracking_action)
+                                        TrackingControl)
 
 PARAMS = SatParams()
+CONTROL = TrackingControl(PARAMS)
 SENSOR = PARAMS.sensor
 POSE = np.array([50.0, 50.0])
 
@@ -56,7 +57,7 @@ def test_renyi_divergence_is_the_written_out_formula_and_non_negative(seed, alph
 def test_action_that_observes_nothing_scores_zero_and_one_on_the_target_scores_more():
     target = (60.0, 50.0)
     predicted = _cloud(target, spread=0.5)
-    _, scores = tracking_action(predicted, _estimate(target), POSE, PARAMS)
+    _, scores = CONTROL.action(predicted, _estimate(target), POSE)
     moves = actions.action_displacements(PARAMS.actions)
     poses = POSE + moves
     sees = np.array([sensor_model.in_sensing_square(predicted.states[:, [0, 2]], p,
@@ -70,8 +71,8 @@ def test_best_action_moves_towards_the_target():
     for direction in range(8):
         angle = direction * np.pi / 4
         target = POSE + 7.5 * np.array([np.cos(angle), np.sin(angle)])
-        action, _ = tracking_action(_cloud(target, spread=0.8, seed=direction),
-                                    _estimate(target), POSE, PARAMS)
+        action, _ = CONTROL.action(_cloud(target, spread=0.8, seed=direction),
+                                   _estimate(target), POSE)
         move = actions.action_displacements(PARAMS.actions)[action]
         assert np.dot(move, target - POSE) > 0
 
@@ -79,14 +80,14 @@ def test_best_action_moves_towards_the_target():
 def test_inadmissible_actions_are_never_chosen():
     corner = np.array([1.0, 1.0])
     target = (-3.0, -3.0)                    # just outside the area, beyond the corner
-    action, scores = tracking_action(_cloud(target), _estimate(target), corner, PARAMS)
+    action, scores = CONTROL.action(_cloud(target), _estimate(target), corner)
     allowed = actions.admissible_mask(corner, PARAMS.actions, PARAMS.area)
     assert np.all(np.isneginf(scores[~allowed]))
     assert allowed[action]
 
 
 def test_no_particles_means_stay():
-    action, scores = tracking_action(ParticlePHD.empty(), _estimate(), POSE, PARAMS)
+    action, scores = CONTROL.action(ParticlePHD.empty(), _estimate(), POSE)
     assert action == 0 and np.all(scores[np.isfinite(scores)] == 0.0)
 
 
@@ -98,7 +99,7 @@ def test_score_equals_divergence_of_a_full_pseudo_update():
     states[:200, [0, 2]] = POSE + rng.normal(0, 2, (200, 2))
     predicted = ParticlePHD(states, rng.random(3000) * 1e-3)
     estimate = _estimate(POSE + 1.0)
-    _, scores = tracking_action(predicted, estimate, POSE, PARAMS)
+    _, scores = CONTROL.action(predicted, estimate, POSE)
     for action, pose in enumerate(actions.candidate_poses(POSE, PARAMS.actions)):
         z = predicted_ideal_measurements(estimate, pose, SENSOR)
         full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR)
@@ -106,17 +107,20 @@ def test_score_equals_divergence_of_a_full_pseudo_update():
                                                rel=1e-9)
 
 
-def test_the_choice_keeps_the_target_at_the_stand_off_inside_the_square():
+def test_track_standoff_switch_keeps_the_target_at_the_stand_off_or_takes_the_pure_argmax():
     """Among the stand-off actions the Renyi score decides; the scores stay the Renyi ones."""
     target = POSE + np.array([0.5, 0.0])                 # next to the agent
-    action, scores = tracking_action(_cloud(target, spread=0.8), _estimate(target), POSE, PARAMS)
+    action, scores = CONTROL.action(_cloud(target, spread=0.8), _estimate(target), POSE)
     chosen = actions.candidate_poses(POSE, PARAMS.actions)[action]
     offset = np.abs(target - chosen)
     assert np.hypot(*offset) >= PARAMS.cooperation.track_standoff
     assert offset.max() <= SENSOR.square_side / 2.0 - PARAMS.cooperation.track_edge_margin
     assert np.isfinite(scores).all() and scores[action] > 0.0
-    # Without a stand-off the agent would stay on top of the target (or move closer).
-    free = SatParams().with_overrides({'cooperation.track_standoff': 0.0})
-    best, _ = tracking_action(_cloud(target, spread=0.8), _estimate(target), POSE, free)
+    # The switch off, the paper's pure argmax over the admissible actions (the same scores):
+    # the agent would stay on top of the target (or move closer).
+    paper = TrackingControl(PARAMS.with_overrides({'additions.track_standoff': False}))
+    best, same = paper.action(_cloud(target, spread=0.8), _estimate(target), POSE)
+    np.testing.assert_array_equal(same, scores)
+    assert best == np.argmax(scores) != action
     assert np.hypot(*(actions.candidate_poses(POSE, PARAMS.actions)[best] - target)) < (
         PARAMS.cooperation.track_standoff)

@@ -2,10 +2,10 @@
 
 ``Agent.step`` runs, at step k (the filter was predicted to k at the end of step k-1):
 
-1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k, with the
-   targets and tentative peaks of k-1 predicted to k for track continuity and confirmation
-   (state_extraction);
-2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation");
+1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k with the
+   extractor (state_extraction; it remembers what the next extraction needs);
+2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation"), each
+   predicted from its step to k first (search_density);
 3. tracking overlap: for every neighbour that, like this agent, was in TRACK at k-1, add the
    incremental score (Eqn. ospa) of the two agents' k-1 reports (poses s_{k-1} and predicted
    positions x + v T) to the window; leave TRACK when the window says overlap and this agent is
@@ -16,10 +16,10 @@
 6. predict the SAT-PHD to k+1 with s_k (Eqn. satphd_predict) and choose the action: the search
    control (nearest admissible pose to the next node) in SEARCH, the Renyi-divergence tracking
    control (Eqn. track_control) on the predicted PHD and the predicted multi-target state
-   X-hat_{k+1|k} in TRACK; in SEARCH with a tentative peak in view, the same tracking control
-   on that peak for up to search.investigate_steps steps, and with only a measurement seen
-   once (a newborn spot), the search move that keeps it in the next square
-   (``Agent._investigation``);
+   X-hat_{k+1|k} in TRACK; with additions.investigation, a searching agent may instead look at
+   a tentative peak with the tracking control, or keep a newborn spot in its next square
+   (beyond_paper/investigation.py). A baseline of ``search.policy`` (baselines/) replaces the
+   search control, or the whole control (PHD-Voronoi, Thompson sampling);
 7. publish the report of step k: search density, multi-target estimate, mode (what the paper
    exchanges) with agent id, step and pose as header.
 
@@ -27,33 +27,41 @@ Agreeing on a joint plan without extra messages: every member of a group must co
 partition of the unvisited nodes. So a joint plan at step k is made only from the reports of
 step k-1 of all members, the agent's *own* k-1 report included (not its newer state): the
 starts are the members' k-1 poses and the node values come from the elementwise max of their
-k-1 search densities. The group is this agent plus the senders of the inbox's reports that were
-in SEARCH at k-1. Since radio range is symmetric, two agents in range see each other's k-1
-report at the same step and so see the same events: an agent joining S_k, the set of agents in
-SEARCH by the k-1 reports (first contact, meeting again, a return to SEARCH), or a member
-leaving SEARCH; both replan jointly at that step and compute identical node partitions
-independently. Replans that only one agent makes (own walk exhausted, own return to SEARCH) are
-made alone from its current state; leaving radio range does not replan (the members keep their
-walks of the joint plan, as in the paper).
+k-1 search densities, each predicted to k with its sender's pose. The group is this agent plus
+the senders of the inbox's reports that were in SEARCH at k-1. Since radio range is symmetric,
+two agents in range see each other's k-1 report at the same step and so see the same events: an
+agent joining S_k, the set of agents in SEARCH by the k-1 reports (first contact, meeting again,
+a return to SEARCH), or a member leaving SEARCH; both replan jointly at that step and compute
+identical node partitions independently. Replans that only one agent makes (own walk exhausted,
+own return to SEARCH) are made alone from its current state; leaving radio range does not
+replan (the members keep their walks of the joint plan, as in the paper).
+
+The components that implement additions to the paper are chosen once, here and in the
+components' constructors, from ``params.additions`` (beyond_paper/__init__.py lists them);
+``step`` does not branch on them.
 """
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cached_property
 from typing import List, Optional, Sequence
 
 import numpy as np
 
 from sat_agent.actions import candidate_poses
+from sat_agent.baselines import baseline_policy
+from sat_agent.baselines.interface import BaselineView
+from sat_agent.beyond_paper.investigation import (
+    Investigation, keep_in_view_action, Look, NO_LOOK)
+from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.config import SatParams
 from sat_agent.density_codec import encode_density
 from sat_agent.mode_machine import Mode, ModeMachine
-from sat_agent.phd_filter import SatPhdFilter
-from sat_agent.search_baselines import baseline_policy
+from sat_agent.phd_filter import BirthSpots, SatPhdFilter
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import SearchMap
-from sat_agent.search_planning import ReplanReason, search_action, SearchPlanner
-from sat_agent.state_extraction import extract_targets, MultiTargetEstimate, TargetEstimate
-from sat_agent.tracking_control import tracking_action
+from sat_agent.search_planning import ReplanReason, SearchPlanner
+from sat_agent.state_extraction import MultiTargetEstimate, NHatExtractor, predicted_positions
+from sat_agent.tracking_control import TrackingControl
 from sat_agent.tracking_overlap import OverlapMonitor
 
 # Radio accounting: payload bytes of the three messages of a report (what the paper exchanges),
@@ -115,10 +123,7 @@ class AgentReport:
 
     def predicted_positions(self, dt: float) -> np.ndarray:
         """(n, 2) positions one step ahead (x + v T): X-hat_{k+1|k} for the overlap test."""
-        targets = self.estimate.targets
-        if not targets:
-            return np.zeros((0, 2))
-        return np.array([t.position + dt * t.velocity for t in targets], dtype=float)
+        return predicted_positions(self.estimate.targets, dt)
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,18 +146,21 @@ class AgentOutput:
     replan: ReplanReason = ReplanReason.NONE
 
 
-def _predicted_positions(targets: Sequence[TargetEstimate], dt: float) -> np.ndarray:
-    """(n, 2) positions x + v T of the estimated targets one step ahead."""
-    if not targets:
-        return np.zeros((0, 2))
-    return np.array([t.position + dt * t.velocity for t in targets], dtype=float)
+class NoInvestigation:
+    """The paper's searching agent follows its walk: it looks at nothing."""
+
+    def look(self, mode: Mode, estimate: MultiTargetEstimate, cooldown_left: int,
+             birth_spots: BirthSpots) -> Look:
+        """Return NO_LOOK."""
+        return NO_LOOK
 
 
 class Agent:
     """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
 
     Same constructor arguments and same step inputs give the same outputs: the only randomness
-    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id).
+    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id), and a
+    random baseline's, seeded with (seed, agent_id, its stream) (baselines/interface.py).
     """
 
     def __init__(self, agent_id: int, params: SatParams, initial_pose, seed: int = 0):
@@ -161,25 +169,22 @@ class Agent:
         self._rng = np.random.default_rng(np.random.SeedSequence(
             int(seed), spawn_key=(FILTER_STREAM, self.agent_id)))
         self.filter = SatPhdFilter(params, self._rng)
+        additions = params.additions
+        self.extractor = (PeakExtractor if additions.peak_extraction else NHatExtractor)(params)
         self.search_map = SearchMap.for_area(params.area, params.search.node_spacing)
         self.planner = SearchPlanner(self.search_map, params)
-        # The evaluation's baselines (search.policy); None for the paper's closed walks.
+        # The evaluation's baselines (search.policy, baselines/); None for the paper's policy.
         self.baseline = baseline_policy(params, self.search_map, self.agent_id, initial_pose,
                                         seed)
         self.modes = ModeMachine(params)
         self.overlap = OverlapMonitor(params)
+        self.tracking = TrackingControl(params)
+        self.investigation = (Investigation(params) if additions.investigation
+                              else NoInvestigation())
         self._scratch = SearchDensity(self.filter.search.lattice)
         self._last_report: Optional[AgentReport] = None
         self.dropped_reports = 0
         self._previous_searchers: frozenset = frozenset()
-        self._expected = np.zeros((0, 2))
-        self._candidates = (np.zeros((0, 2)), np.zeros(0, dtype=int))
-        # Investigation in SEARCH: steps spent on a tentative peak or newborn spot, the spots
-        # given up on.
-        self._investigated = 0
-        self._abandoned: list = []
-        self._look: tuple = ()
-        self._looking_at_newborn = False
         # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
         self.filter.predict(np.asarray(initial_pose, dtype=float))
 
@@ -192,120 +197,60 @@ class Agent:
         """Run one step k (module docstring); inbox holds the neighbours' reports.
 
         Reports of step k-1 take part in everything; older ones (a radio with latency) only add
-        their search density: the fusion by max is right whatever the density's age, whereas
-        joint plans and the overlap test need the same step on every side.
+        their search density, predicted to k like every received density: joint plans and the
+        overlap test need the same step on every side.
         """
         pose = np.asarray(pose, dtype=float).reshape(2)
         measurements = np.asarray(measurements, dtype=float).reshape(-1, 2)
         late = self._valid_reports(step, inbox, late=True)
         reports = self._valid_reports(step, inbox)
         self.filter.correct(measurements, pose)
-        estimate = extract_targets(self.filter.targets, pose, self.params,
-                                   previous=self._expected, candidates=self._candidates)
-        # Where this step's targets and heavy tentative peaks should be at k+1 (x + v T): the
-        # track-continuity and confirmation gates of the next extraction (state_extraction).
-        dt = self.params.motion.dt
-        self._expected = _predicted_positions(estimate.targets, dt)
-        self._candidates = (_predicted_positions(estimate.tentative, dt),
-                            np.array(estimate.tentative_streaks, dtype=int))
+        estimate = self.extractor.extract(self.filter.targets, pose)
         for report in late + reports:
-            self.filter.search.fuse(report.search_values)
+            self.filter.search.fuse(self._density_at(step, report))
         searchers = self._searchers(reports)
         was_tracking = self.modes.mode == Mode.TRACK
         leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
         mode = self.modes.update(len(estimate.targets), leaving_for is not None)
         replan = ReplanReason.NONE
         if mode == Mode.SEARCH and self.baseline is None:
-            replan = self._search_plan(pose, reports, searchers, resumed=was_tracking)
+            replan = self._search_plan(step, pose, reports, searchers, resumed=was_tracking)
         self._previous_searchers = searchers
         # The report carries the posterior (fused) density of step k, in float32 as on the wire,
         # so in-process and ROS runs exchange the very same values.
         report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
                              self.filter.search.values.astype(np.float32), estimate)
         self.filter.predict(pose)
-        look = self._investigation(mode, estimate)
-        # A newborn spot only asks the search move to keep it in the next square.
-        keep = look.positions() if look is not None and self._looking_at_newborn else None
-        if look is not None and keep is None:
-            action, _ = tracking_action(self.filter.targets, look, pose, self.params)
-            goal = candidate_poses(pose, self.params.actions)[action]
-            plan = self.planner.walk_points()
-        elif mode == Mode.SEARCH and self.baseline is not None:
-            action, goal, plan = self.baseline.choose(pose)
-            if keep is not None:
-                action = search_action(pose, goal, self.params, keep)
-        elif mode == Mode.SEARCH:
-            goal = self._search_goal(pose)
-            action = search_action(pose, goal, self.params, keep)
-            plan = self.planner.walk_points()
-        else:
-            predicted = extract_targets(self.filter.targets, pose, self.params,
-                                        previous=self._expected, candidates=self._candidates)
-            action, _ = tracking_action(self.filter.targets, predicted, pose, self.params)
-            goal = candidate_poses(pose, self.params.actions)[action]
-            plan = np.zeros((0, 2))
+        view = BaselineView(int(step), self.filter.targets, report, tuple(reports))
+        action, goal, plan = self._control(mode, pose, estimate, view)
         self._last_report = report
         return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
                            mode, leaving_for, replan)
 
-    def _investigation(self, mode: Mode, estimate: MultiTargetEstimate):
-        """Tentative peaks or newborn spots to look at from SEARCH (their X-hat_{k+1|k}), or None.
+    def _control(self, mode: Mode, pose: np.ndarray, estimate: MultiTargetEstimate,
+                 view: BaselineView):
+        """Return (action, goal, plan) of step k, on the PHD predicted to k+1.
 
-        A design choice the paper leaves open: one pass of a searching agent gives a target
-        2-3 scans, too few to confirm it under dense clutter (a tracked target's PHD mass
-        grows by ~1 + g/kappa per scan, and not at all while the agent flies over it). So a
-        searching agent that sees an unconfirmed peak holds its walk for up to
-        ``search.investigate_steps`` steps and places itself with the tracking control (Eqn.
-        track_control, with its stand-off) on the tentative peaks; a target then reaches
-        round(mass) = 1 twice and the agent enters TRACK, a clutter cloud fades and the walk
-        resumes. One spot at a time, the heaviest; the spot of a spent budget is abandoned:
-        tentative peaks near it are ignored for 2 * investigate_steps steps.
-
-        Without a tentative peak, the heaviest newborn spot of this scan (a measurement seeding
-        at least phd.tentative_threshold of birth mass) gets one step of the budget, spent on
-        the search move that keeps the spot in the next square (search_action): newborns the
-        next square does not cover are dropped (phd_filter), so a target seen once at the
-        trailing edge of a passing square would otherwise be forgotten. A real target is then a
-        tentative peak; a false alarm leaves nothing and the walk resumes at once.
+        A baseline that steers tracking too is the whole controller. Otherwise, TRACK or a look
+        at tentative peaks from SEARCH: the tracking control on X-hat_{k+1|k} (the looked-at
+        peaks; in SEARCH the walk is kept for later); else the search move (walk or baseline),
+        kept to hold a newborn spot in view when the look asks it.
         """
-        budget = self.params.search.investigate_steps
-        self._abandoned = [(p, t - 1) for p, t in self._abandoned if t > 1]
-        if mode != Mode.SEARCH or self.modes.cooldown_left > 0 or budget == 0:
-            self._investigated = 0
-            return None
-        fresh = self._fresh(estimate.tentative)
-        if fresh:
-            look = (max(fresh, key=lambda t: t.weight),)   # the heaviest spot first
-        elif self._investigated > 0 and not self._looking_at_newborn:
-            look = self._look      # a peak can fade for a scan (a miss, a near pass): keep on
-        else:
-            self._investigated = 0
-            look = self._fresh(self._newborn_spots())[:1]
-            if not look:
-                return None
-        if self._investigated >= budget:
-            self._abandoned += [(t.position, 2 * budget) for t in look]
-            self._investigated = 0
-            return None
-        self._looking_at_newborn = not fresh
-        self._investigated += 1
-        dt = self.params.motion.dt
-        self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
-        return MultiTargetEstimate(self._look, 0.0)
-
-    def _fresh(self, spots: Sequence[TargetEstimate]) -> tuple:
-        """Return the spots farther than phd.continue_gate from every abandoned spot."""
-        gate = self.params.phd.continue_gate
-        return tuple(t for t in spots if not any(
-            np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
-
-    def _newborn_spots(self) -> tuple:
-        """Return this scan's birth spots of at least phd.tentative_threshold, heaviest first."""
-        spots = self.filter.birth_spots
-        order = np.argsort(-spots.masses, kind='stable')
-        order = order[spots.masses[order] >= self.params.phd.tentative_threshold]
-        return tuple(TargetEstimate(spots.positions[i].copy(), np.zeros(2), np.zeros((4, 4)),
-                                    float(spots.masses[i])) for i in order)
+        if self.baseline is not None and self.baseline.steers_tracking:
+            return self.baseline.choose(pose, view)
+        look = self.investigation.look(mode, estimate, self.modes.cooldown_left,
+                                       self.filter.birth_spots)
+        if mode == Mode.TRACK or look.peaks is not None:
+            targets = look.peaks if mode == Mode.SEARCH else self.extractor.estimate(
+                self.filter.targets, pose)[0]
+            action, _ = self.tracking.action(self.filter.targets, targets, pose)
+            plan = self.planner.walk_points() if mode == Mode.SEARCH else np.zeros((0, 2))
+            return action, candidate_poses(pose, self.params.actions)[action], plan
+        action, goal, plan = (self.planner.choose(pose) if self.baseline is None
+                              else self.baseline.choose(pose, view))
+        if look.keep is not None:
+            action = keep_in_view_action(pose, goal, self.params, look.keep)
+        return action, goal, plan
 
     def _valid_reports(self, step: int, inbox: Sequence[AgentReport],
                        late: bool = False) -> List[AgentReport]:
@@ -367,7 +312,7 @@ class Agent:
             members.append(own)
         return frozenset(r.agent_id for r in members)
 
-    def _search_plan(self, pose: np.ndarray, reports: Sequence[AgentReport],
+    def _search_plan(self, step: int, pose: np.ndarray, reports: Sequence[AgentReport],
                      searchers: frozenset, resumed: bool) -> ReplanReason:
         """Mark visited nodes and replan when needed (module docstring).
 
@@ -394,7 +339,7 @@ class Agent:
         if joint:
             members = [own] + searching
             starts = {r.agent_id: r.pose for r in members}
-            fused = np.maximum.reduce([r.search_values for r in members])
+            fused = np.maximum.reduce([self._density_at(step, r) for r in members])
             self.planner.plan(self.agent_id, starts, self.search_map_values(fused))
         else:
             self.planner.plan(self.agent_id, {self.agent_id: pose}, own_values)
@@ -402,9 +347,10 @@ class Agent:
         self.planner.mark_visited(pose, own_values)
         return reason
 
-    def _search_goal(self, pose: np.ndarray) -> np.ndarray:
-        goal = self.planner.next_goal()
-        return pose if goal is None else goal
+    def _density_at(self, step: int, report: AgentReport) -> np.ndarray:
+        """Return the report's search density predicted from its step to step (search_density)."""
+        return self._scratch.predicted(report.search_values, report.pose, step - report.step,
+                                       self.params.sensor, self.params.search.decay)
 
     def search_map_values(self, density_values: np.ndarray) -> np.ndarray:
         """Eqn. search_value of every search-map node for a (ny, nx) search density."""

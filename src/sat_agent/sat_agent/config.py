@@ -5,9 +5,47 @@ leaves open is a default chosen and justified next to its field. ``SatParams.fro
 the nested YAML form (``config/paper.yaml``) or ROS 2's flattened dotted names
 (``sensor.square_side``) and refuses unknown keys and out-of-range values with a message naming
 the key, the value and what is allowed.
+
+Two kinds of departure from the paper, kept apart:
+
+- *Additions*: behaviour the paper does not have. Each is one bool of ``AdditionsParams``
+  (group ``additions``) and one module of ``sat_agent/beyond_paper/``; ``config/paper.yaml``
+  switches them all on, ``config/paper_strict.yaml`` all off. Their numeric tunables (e.g.
+  ``search.investigate_steps``) tune an addition but cannot switch it off on their own.
+- *Interpretations*: where the paper is silent or a literal reading cannot run, the simplest
+  reading, in both profiles, no switch (each is stated where it is implemented, too):
+
+  - birth model: uniform births plus measurement-driven births (``phd``), particle budgets;
+  - beta, node spacing, lattice spacing, the OSPA cut-off c, Q_Th and its window, the track
+    timeout (``search``, ``cooperation``);
+  - n-hat of the predicted multi-target state X-hat_{k|k-1} (overlap test, tracking control)
+    is the PHD mass over the sensing area, as for X-hat_k (Section Search-and-Track Density):
+    over the whole state space the diffuse birth mass (~1 at steady state) would count as a
+    target (state_extraction);
+  - a peak of the particle PHD is the densest 1 m cell (3 x 3 smoothed) refined by mean shift;
+    its region is ``phd.peak_radius`` around it (state_extraction);
+  - the exchanged predicted states X-hat_{k|k-1} are the sender's k-1 estimates moved by
+    x + v T, the peak means under the motion model (agent_core, tracking_overlap);
+  - Eqn. pims only for the targets in u's square: p_D is 0 outside it (tracking_control);
+  - a node whose centre is in view is visited (the paper's "marked as visited"): a new walk
+    drops the nodes in view at once, and an exhaustion replan leaves them out
+    (search_planning);
+  - xi_search is the distance from the pose an action leads to, to the next node (the paper's
+    "current position" would score every action alike) (search_planning);
+  - when a walk is exhausted the agent plans a new one from where it is, alone; a joint plan
+    is made at first contact, when a member leaves SEARCH and on a return to SEARCH, from the
+    members' k-1 reports; leaving radio range keeps the joint walks (search_planning,
+    agent_core);
+  - V-bar empty (no node at or below beta): the closed walk over no node is s_k itself, so the
+    agent holds until a node decays below beta (search_planning);
+  - the overlap leaver is the higher id; a step where either predicted set is empty scores inf
+    (tracking_overlap);
+  - a neighbour's search density of step j < k is predicted to k before the max: one step of
+    Eqn. satphd_predict with the sender's pose s_j, then J per further step (its later poses are
+    unknown) (search_density).
 """
 
-from dataclasses import dataclass, field, fields, is_dataclass, replace
+from dataclasses import dataclass, field, fields, replace
 import math
 from typing import Any, Mapping
 
@@ -33,7 +71,7 @@ def _check(key: str, value: Any, low: float, high: float, *, low_open=False, hig
 
 
 INF = math.inf
-SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk')
+SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk', 'phd_voronoi', 'thompson')
 SEARCH_PLANNERS = ('greedy', 'ortools')
 
 
@@ -153,28 +191,29 @@ class PhdParams:
     particles_per_target: int = 2000   # resampling budget per unit of PHD mass
     min_particles: int = 2000
     max_particles: int = 20000
-    # State extraction looks at the PHD inside the sensing square grown by this margin: a target
-    # moves ~1 m/step and the agent up to 4 m/step, so 5 m keeps a tracked target in the region
-    # for a step even when it leaves the square.
+    # Addition additions.extraction_margin: state extraction looks at the PHD inside the sensing
+    # square grown by this margin (> 0): a target moves ~1 m/step and the agent up to 4 m/step,
+    # so 5 m keeps a tracked target in the region for a step even when it leaves the square.
     extraction_margin: float = 5.0
     # State extraction (state_extraction.py). A peak's region: particles within peak_radius of
     # it; a target's predicted cloud under the paper's Q is ~1.3 m (1 sigma), so 3 m holds
     # ~90 % of its mass.
     peak_radius: float = 3.0
-    # Track continuity: a target of k-1 continues while the peak found from its predicted
-    # position x + v T, within continue_gate (a walking target moves ~1 m/step, its estimate
-    # errs ~1 m), keeps continue_threshold of mass. Under the dense reading of the clutter
-    # (config/dense_clutter.yaml) a tracked target's PHD mass settles at ~0.3-0.6
-    # (0.99 - kappa / g_bar), below the 0.5 that round(mass) needs, so a target is kept down
-    # to 0.2; below that it is lost.
+    # Addition additions.peak_extraction, track continuity: a target of k-1 continues while the
+    # peak found from its predicted position x + v T, within continue_gate (a walking target
+    # moves ~1 m/step, its estimate errs ~1 m), keeps continue_threshold of mass. Under the
+    # dense reading of the clutter (config/dense_clutter.yaml) a tracked target's PHD mass
+    # settles at ~0.3-0.6 (0.99 - kappa / g_bar), below the 0.5 that round(mass) needs, so a
+    # target is kept down to 0.2; below that it is lost.
     continue_threshold: float = 0.2
     continue_gate: float = 3.0
-    # Confirmation: a new target needs round(mass) >= 1 on confirm_scans scans in a row at
-    # peaks within confirm_gate of each other (clutter-born peaks rarely stay that heavy twice).
+    # Addition additions.confirmation: a new target needs round(mass) >= 1 on confirm_scans
+    # (>= 2) scans in a row at peaks within confirm_gate of each other (clutter-born peaks
+    # rarely stay that heavy twice).
     confirm_scans: int = 2
     confirm_gate: float = 3.0
     # Unconfirmed peaks in the square with at least this mass are tentative: a searching agent
-    # may stop to look at them (agent_core, search.investigate_steps).
+    # may stop to look at them (additions.investigation).
     tentative_threshold: float = 0.2
 
     def validate(self, prefix='phd'):
@@ -187,12 +226,12 @@ class PhdParams:
         _check(f'{prefix}.particles_per_target', self.particles_per_target, 1, 1e6)
         _check(f'{prefix}.min_particles', self.min_particles, 1, 1e7)
         _check(f'{prefix}.max_particles', self.max_particles, self.min_particles, 1e7)
-        _check(f'{prefix}.extraction_margin', self.extraction_margin, 0, 100)
+        _check(f'{prefix}.extraction_margin', self.extraction_margin, 0, 100, low_open=True)
         _check(f'{prefix}.continue_threshold', self.continue_threshold, 0, 0.5)
         _check(f'{prefix}.continue_gate', self.continue_gate, 0, 100)
         _check(f'{prefix}.tentative_threshold', self.tentative_threshold, 0, 0.5)
         _check(f'{prefix}.peak_radius', self.peak_radius, 0, 100, low_open=True)
-        _check(f'{prefix}.confirm_scans', self.confirm_scans, 1, 100)
+        _check(f'{prefix}.confirm_scans', self.confirm_scans, 2, 100)
         _check(f'{prefix}.confirm_gate', self.confirm_gate, 0, 100)
 
 
@@ -210,16 +249,19 @@ class SearchParams:
     # its region seen recently"; a fully searched region takes ln(0.5)/ln(0.999) ~ 693 steps to
     # need a revisit.
     unvisited_threshold: float = 0.5
-    # When no node is unvisited (all searched within ln(beta)/ln(J) steps), plan over this share
-    # of the nodes, the least recently searched, instead of idling: targets are born at any time
-    # and the paper's agents keep searching after their first sweep (its Fig. 4h).
+    # Addition additions.revisit_fallback: when no node is unvisited (all searched within
+    # ln(beta)/ln(J) steps), plan over this share (> 0) of the nodes, the least recently
+    # searched, instead of holding: targets are born at any time.
     revisit_share: float = 0.5
-    # Steps a searching agent may spend looking at one tentative peak (agent_core): enough
-    # for confirm_scans more scans from a stand-off, short enough to keep the search going.
+    # Addition additions.investigation: steps (>= 1) a searching agent may spend looking at one
+    # tentative peak: enough for confirm_scans more scans from a stand-off, short enough to keep
+    # the search going.
     investigate_steps: int = 4
-    # How a searching agent moves: 'sat' is the paper's (closed walks over the search map,
-    # joint plans in range); 'lawnmower' and 'random_walk' are the evaluation's baselines
-    # (search_baselines.py). The filter, tracking and mode machine are the same for all.
+    # How the agent moves: 'sat' is the paper's (closed walks over the search map, joint plans
+    # in range); the others are the evaluation's baselines (sat_agent/baselines/):
+    # 'lawnmower' and 'random_walk' replace the search moves only, 'phd_voronoi' (Dames 2020)
+    # and 'thompson' (DecSTER, Banerjee and Schneider 2024) the whole controller. The filter,
+    # extraction and mode machine are the same for all.
     policy: str = 'sat'
     # How the 'sat' closed walks are made: 'greedy' is the paper's path-cheapest-arc;
     # 'ortools' improves the greedy walks by OR-Tools local search (routing.py).
@@ -230,8 +272,8 @@ class SearchParams:
         _check(f'{prefix}.lattice_spacing', self.lattice_spacing, 0, INF, low_open=True)
         _check(f'{prefix}.node_spacing', self.node_spacing, 0, INF, low_open=True)
         _check(f'{prefix}.unvisited_threshold', self.unvisited_threshold, 0, 1, high_open=True)
-        _check(f'{prefix}.revisit_share', self.revisit_share, 0, 1)
-        _check(f'{prefix}.investigate_steps', self.investigate_steps, 0, 10000)
+        _check(f'{prefix}.revisit_share', self.revisit_share, 0, 1, low_open=True)
+        _check(f'{prefix}.investigate_steps', self.investigate_steps, 1, 10000)
         _choice(f'{prefix}.policy', self.policy, SEARCH_POLICIES)
         _choice(f'{prefix}.planner', self.planner, SEARCH_PLANNERS)
 
@@ -250,13 +292,15 @@ class CooperationParams:
     overlap_threshold: float = 10.0
     # TRACK falls back to SEARCH after this many consecutive steps with no estimated target.
     track_timeout: int = 5
-    # After leaving TRACK because of an overlap, ignore estimated targets for this many steps
-    # (up to 4 m/step of flight, far beyond the a/2 + extraction margin = 10 m it takes to get
-    # the abandoned targets out of view).
+    # Addition additions.rejoin_cooldown: after leaving TRACK because of an overlap, ignore
+    # estimated targets for this many steps (>= 1; up to 4 m/step of flight, far beyond the
+    # a/2 + extraction margin = 10 m it takes to get the abandoned targets out of view).
     rejoin_cooldown: int = 10
-    # Tracking-control stand-off (tracking_control.py): keep targets this far from the agent
-    # (clutter is kappa / d per m^2, so detections closer than ~3 m carry little evidence) and
-    # this far inside the square's edge (a target walks ~1 m/step, the estimate errs ~1 m).
+    # Addition additions.track_standoff: the tracking control keeps targets this far (> 0) from
+    # the agent (clutter is kappa / d per m^2, so detections closer than ~3 m carry little
+    # evidence) and this far inside the square's edge (a target walks ~1 m/step, the estimate
+    # errs ~1 m). The edge margin also bounds where additions.investigation keeps a spot seen
+    # once in the next square.
     track_standoff: float = 3.0
     track_edge_margin: float = 1.5
 
@@ -267,9 +311,65 @@ class CooperationParams:
         _check(f'{prefix}.overlap_window', self.overlap_window, 1, 10000)
         _check(f'{prefix}.overlap_threshold', self.overlap_threshold, 0, INF)
         _check(f'{prefix}.track_timeout', self.track_timeout, 1, 10000)
-        _check(f'{prefix}.rejoin_cooldown', self.rejoin_cooldown, 0, 10000)
-        _check(f'{prefix}.track_standoff', self.track_standoff, 0, INF)
+        _check(f'{prefix}.rejoin_cooldown', self.rejoin_cooldown, 1, 10000)
+        _check(f'{prefix}.track_standoff', self.track_standoff, 0, INF, low_open=True)
         _check(f'{prefix}.track_edge_margin', self.track_edge_margin, 0, INF)
+
+
+@dataclass(frozen=True)
+class AdditionsParams:
+    """Switches of the additions to the paper (module docstring; one module each in beyond_paper/).
+
+    True is config/paper.yaml (our detection chain), False is the paper as written
+    (config/paper_strict.yaml). Each switch is the only way to turn its addition off.
+    """
+
+    # Per-peak counting with track continuity instead of n-hat = round(PHD mass in the sensing
+    # area) and the n-hat highest peaks: diffuse clutter-born mass is not counted as a target and
+    # a tracked target survives a light scan (beyond_paper/peak_extraction.py).
+    peak_extraction: bool = True
+    # Extraction over the sensing square grown by phd.extraction_margin instead of S_a(s_k):
+    # a tracked target that leaves the square for a step is not dropped
+    # (beyond_paper/extraction_margin.py).
+    extraction_margin: bool = True
+    # A new target needs round(mass) >= 1 on phd.confirm_scans scans in a row instead of TRACK
+    # on the first estimate: clutter-born peaks seldom stay heavy twice
+    # (beyond_paper/confirmation.py).
+    confirmation: bool = True
+    # A searching agent holds its walk for up to search.investigate_steps steps to look at a
+    # tentative peak, and keeps a measurement seen once in its next square: one pass gives a
+    # target too few scans to be confirmed (beyond_paper/investigation.py).
+    investigation: bool = True
+    # Measurement-driven newborns the next sensing square does not cover are dropped: they can
+    # be neither confirmed nor killed and would linger as ghost mass
+    # (beyond_paper/newborn_gate.py).
+    newborn_gate: bool = True
+    # The tracking control's argmax runs over the actions keeping every target
+    # cooperation.track_standoff from the agent and cooperation.track_edge_margin inside the
+    # square: next to the agent a detection is barely told from clutter, and a target at the
+    # edge is lost at the next step (beyond_paper/track_standoff.py).
+    track_standoff: bool = True
+    # With no node at or below beta, plan over the search.revisit_share least searched nodes
+    # instead of holding: targets are born at any time (beyond_paper/revisit_fallback.py).
+    revisit_fallback: bool = True
+    # After leaving TRACK because of an overlap, ignore estimated targets for
+    # cooperation.rejoin_cooldown steps: the leaver still sees the abandoned targets and would
+    # re-enter TRACK at once (beyond_paper/rejoin_cooldown.py).
+    rejoin_cooldown: bool = True
+    # An exhaustion replan leaves out the nodes the last joint plan gave the other members
+    # while any other node is unvisited: the members do not replan at that step, so their
+    # walks still hold those nodes (beyond_paper/exhaustion_claims.py).
+    exhaustion_claims: bool = True
+    # A walk drops the nodes whose fused search value shows another agent searched them since
+    # the plan, instead of visiting them again (beyond_paper/drop_searched_nodes.py).
+    drop_searched_nodes: bool = True
+
+    def validate(self, prefix='additions'):
+        for item in fields(self):
+            value = getattr(self, item.name)
+            if not isinstance(value, bool):
+                raise ParameterError(
+                    f"parameter '{prefix}.{item.name}' = {value!r}: must be true or false")
 
 
 @dataclass(frozen=True)
@@ -283,6 +383,7 @@ class SatParams:
     phd: PhdParams = field(default_factory=PhdParams)
     search: SearchParams = field(default_factory=SearchParams)
     cooperation: CooperationParams = field(default_factory=CooperationParams)
+    additions: AdditionsParams = field(default_factory=AdditionsParams)
 
     def validate(self) -> 'SatParams':
         """Check every group; raise ParameterError naming the first bad key."""
@@ -351,7 +452,10 @@ def _build_group(name: str, cls, given: Mapping[str, Any]):
     values = {}
     for key, value in given.items():
         default = getattr(cls(), key)
-        if isinstance(default, bool) or is_dataclass(default):
+        if isinstance(default, bool):
+            if not isinstance(value, bool):
+                raise ParameterError(
+                    f"parameter '{name}.{key}' = {value!r}: must be true or false")
             values[key] = value
         elif isinstance(default, str):
             if not isinstance(value, str):

@@ -5,17 +5,17 @@ to searching when it has estimated no target for ``cooperation.track_timeout`` c
 (a short miss, e.g. one missed detection at p_D = 0.99, does not end the track), or at once when
 the tracking-overlap test makes it the leaver.
 
-After leaving because of an overlap the agent still sees the abandoned targets for a few steps
-while it flies off; re-entering TRACK then would undo the overlap resolution. So it ignores
-estimated targets (stays in SEARCH) for ``cooperation.rejoin_cooldown`` steps. The mode machine
-only sees target counts, so the cooldown is on time, not on target identity: 10 steps by default,
-during which the agent can fly up to N_R * Delta_R = 4 m per step, far more than the
-a / 2 + extraction margin = 10 m it takes to get the abandoned targets out of its extraction
-region.
+The track timeout is an interpretation: the paper does not say when TRACK ends.
+
+The paper's leaver searches from the next step and, like every searching agent, tracks again on
+its next estimate (``NoCooldown``). The addition ``additions.rejoin_cooldown`` makes it ignore
+estimated targets for ``cooperation.rejoin_cooldown`` steps first
+(beyond_paper/rejoin_cooldown.py).
 """
 
 import enum
 
+from sat_agent.beyond_paper.rejoin_cooldown import RejoinCooldown
 from sat_agent.config import SatParams
 
 
@@ -26,21 +26,34 @@ class Mode(enum.IntEnum):
     TRACK = 1
 
 
+class NoCooldown:
+    """The paper's leaver: it tracks again on its next estimate."""
+
+    left = 0
+
+    def start(self) -> None:
+        """Do nothing: the paper's leaver has nothing to count."""
+
+    def hold(self) -> bool:
+        """Return False: targets are never ignored."""
+        return False
+
+
 class ModeMachine:
     """The agent's mode and its transitions (module docstring); starts in SEARCH."""
 
     def __init__(self, params: SatParams):
         self._timeout = int(params.cooperation.track_timeout)
-        self._cooldown = int(params.cooperation.rejoin_cooldown)
+        self._cooldown = (RejoinCooldown(params.cooperation.rejoin_cooldown)
+                          if params.additions.rejoin_cooldown else NoCooldown())
         self.mode = Mode.SEARCH
         self.switched = False
         self._steps_without_targets = 0
-        self._cooldown_left = 0
 
     @property
     def cooldown_left(self) -> int:
         """Steps during which estimated targets are still ignored after an overlap exit."""
-        return self._cooldown_left
+        return self._cooldown.left
 
     def update(self, n_targets: int, leave_tracking: bool) -> Mode:
         """Advance one step with the number of estimated targets; return the (new) mode.
@@ -53,9 +66,7 @@ class ModeMachine:
         previous = self.mode
         if self.mode == Mode.TRACK:
             self._update_tracking(int(n_targets), bool(leave_tracking))
-        elif self._cooldown_left > 0:
-            self._cooldown_left -= 1
-        elif n_targets > 0:
+        elif not self._cooldown.hold() and n_targets > 0:
             self.mode = Mode.TRACK
             self._steps_without_targets = 0
         self.switched = self.mode != previous
@@ -64,7 +75,7 @@ class ModeMachine:
     def _update_tracking(self, n_targets: int, leave_tracking: bool):
         if leave_tracking:
             self.mode = Mode.SEARCH
-            self._cooldown_left = self._cooldown
+            self._cooldown.start()
             return
         self._steps_without_targets = 0 if n_targets > 0 else self._steps_without_targets + 1
         if self._steps_without_targets >= self._timeout:

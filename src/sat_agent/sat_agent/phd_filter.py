@@ -28,9 +28,11 @@ Birth intensity b_k(x) of Eqn. satphd_predict, with x = [p, v] (position p, velo
   newborn weights by kappa + tau + gamma. They are kept aside (not in the
   posterior, so they do not bias the extracted count) and join the targets at the next predict,
   where they are propagated with the motion model like every particle; the next scan then
-  confirms them (a target is there) or kills them (clutter). Newborns that the next square does
-  not cover (the agent moved away) are dropped at that correction: they could be neither
-  confirmed nor killed and would otherwise linger as ghost mass next to the square.
+  confirms them (a target is there) or kills them (clutter).
+
+Both parts are interpretations: the paper leaves the birth model open. The addition
+``additions.newborn_gate`` drops the newborns the next square does not cover
+(beyond_paper/newborn_gate.py; ``keep_newborns`` is the paper's).
 
 Gating: p_D is 0 outside the sensing square, so the update leaves those particles' weights
 unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the particles inside.
@@ -42,6 +44,7 @@ from typing import Optional
 import numpy as np
 
 from sat_agent import motion_model, sensor_model
+from sat_agent.beyond_paper.newborn_gate import untested_newborns
 from sat_agent.config import PhdParams, SatParams, SensorParams
 from sat_agent.search_density import Lattice, SearchDensity
 
@@ -212,6 +215,11 @@ def measurement_births(spots: BirthSpots, pose, params: SatParams,
     return ParticlePHD(states, weight)
 
 
+def keep_newborns(newborn_states: np.ndarray, pose, sensor: SensorParams) -> np.ndarray:
+    """Return a mask of none to drop: the paper corrects every newborn like any particle."""
+    return np.zeros(len(newborn_states), dtype=bool)
+
+
 class SatPhdFilter:
     """SAT-PHD filter of one agent: true-target particles and the virtual-target lattice."""
 
@@ -225,6 +233,8 @@ class SatPhdFilter:
         # Where pending_births were seeded: a searching agent may look there again (agent_core).
         self.birth_spots = BirthSpots.empty()
         self._newborn = slice(0, 0)
+        self._dropped_newborns = (untested_newborns if params.additions.newborn_gate
+                                  else keep_newborns)
 
     def predict(self, previous_pose) -> None:
         """Eqn. satphd_predict: survival p_S, NCV transition, births, search-density decay."""
@@ -247,12 +257,9 @@ class SatPhdFilter:
         explained = np.zeros(len(np.asarray(measurements).reshape(-1, 2)))
         weights = update_weights(self.targets.states, self.targets.weights, measurements, pose,
                                  params.sensor, explained)
-        # Newborns from the last scan that the new square does not cover cannot be confirmed or
-        # killed; left alone they would pile up as unobservable ghost mass beside the square.
-        newborn = self.targets.states[self._newborn]
-        untested = ~sensor_model.in_sensing_square(motion_model.positions(newborn), pose,
-                                                   params.sensor.square_side)
-        weights[self._newborn.start + np.flatnonzero(untested)] = 0.0
+        dropped = self._dropped_newborns(self.targets.states[self._newborn], pose,
+                                         params.sensor)
+        weights[self._newborn.start + np.flatnonzero(dropped)] = 0.0
         self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
         self.search.correct(pose, params.sensor)
         self.birth_spots = birth_spots(measurements, pose, params, explained)

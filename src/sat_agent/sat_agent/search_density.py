@@ -10,6 +10,16 @@ just been observed holds 1 and a cell never observed holds 0 (the initial value)
 outside the previous pose's square is multiplied by J (Eqn. satphd_predict, third line), so a cell
 last seen k steps ago holds J^k.
 
+A neighbour's density is fused (Section "Cooperation": elementwise max) once predicted to the
+receiver's step: a report of step j is the sender's posterior D_j, so at step k > j it is first
+predicted with one step of Eqn. satphd_predict at the sender's pose s_j (carried in the report):
+cells in S_a(s_j) keep their value, the others decay by J; then by J for every further step,
+because the sender's later poses are not known (a report delayed by radio latency). That is the
+value the cells would hold had the sender not seen them again: it never overstates how recently
+a cell was searched, and whatever the sender did see since reaches the receiver in the sender's
+newer reports. Without the prediction two agents in range hand a "just searched" value back and
+forth (each step's max takes the other's undecayed value) and their densities never age.
+
 With this convention Eqn. search_value reduces to a mean over the node's region r_v:
 p_search(r_v) = (integral over r_v of D^0) / (|r_v| / |A|)
              = (sum over cells c in r_v of D^0_c s^2) / (n_v s^2 / |A|)
@@ -90,11 +100,24 @@ class SearchDensity:
         p_D of virtual targets is 1 inside the previous pose's square, so those cells keep their
         value and every other cell decays by J.
         """
-        window = self._observed_window(previous_pose, sensor.square_side)
-        kept = None if window is None else self.values[window].copy()
-        self.values *= decay
+        self.values = self.predicted(self.values, previous_pose, 1, sensor, decay)
+
+    def predicted(self, values: np.ndarray, pose, steps: int, sensor: SensorParams,
+                  decay: float) -> np.ndarray:
+        """Return a density of this lattice, the posterior of `steps` steps ago, predicted to now.
+
+        One step of Eqn. satphd_predict with pose (the pose of its step), then J for each
+        further step (module docstring). values is not changed.
+        """
+        if steps < 1:
+            raise ValueError(f'a density is predicted forward by steps >= 1, got {steps}')
+        ahead = np.array(values, dtype=float)
+        window = self._observed_window(pose, sensor.square_side)
+        kept = None if window is None else ahead[window].copy()
+        ahead *= decay ** steps
         if kept is not None:
-            self.values[window] = kept
+            ahead[window] = kept * decay ** (steps - 1)
+        return ahead
 
     def correct(self, pose, sensor: SensorParams) -> None:
         """Last two terms of Eqn. satphd_correct: D^0 <- p_D / |A| + (1 - p_D) D^0_{k|k-1}.
@@ -135,7 +158,10 @@ class SearchDensity:
         return np.clip(index, 0, grid.size - 1)
 
     def fuse(self, other_values: np.ndarray) -> None:
-        """Merge a neighbour's values in place by elementwise max (Section "Cooperation")."""
+        """Merge a density of the same step in place by elementwise max (Section "Cooperation").
+
+        A neighbour's report is predicted to this step first (``predicted``).
+        """
         other = np.asarray(other_values, dtype=float)
         if other.shape != self.values.shape:
             raise ValueError(

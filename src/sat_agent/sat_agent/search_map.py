@@ -91,21 +91,6 @@ def unvisited_nodes(node_values, beta: float) -> np.ndarray:
     return np.flatnonzero(values <= beta)
 
 
-def nodes_to_search(node_values, beta: float, revisit_share: float) -> np.ndarray:
-    """Return the nodes a new plan covers: V-bar, or when it is empty the least searched ones.
-
-    When every node was searched within the last ln(beta) / ln(J) steps (693 with the defaults)
-    V-bar is empty; rather than idle while targets may be born anywhere, the agent revisits the
-    ceil(revisit_share |V|) nodes with the lowest search values (ties: lowest index).
-    """
-    unvisited = unvisited_nodes(node_values, beta)
-    values = np.asarray(node_values, dtype=float).reshape(-1)
-    if unvisited.size or revisit_share <= 0.0 or values.size == 0:
-        return unvisited
-    count = int(np.ceil(revisit_share * values.size))
-    return np.sort(np.argsort(values, kind='stable')[:count])
-
-
 def nodes_in_view(search_map: SearchMap, pose, side: float) -> np.ndarray:
     """Return the indices (ascending) of the nodes whose centre is in S_a(pose)."""
     return np.flatnonzero(in_sensing_square(search_map.centers, pose, side))

@@ -20,24 +20,29 @@ sizes differ by at most one.
 
 Control (b): the admissible action of Eqn. controlVectors whose pose is nearest to the next
 unvisited node of the walk.
+
+Three additions live beside the planner (beyond_paper/, chosen once in ``SearchPlanner``):
+``additions.revisit_fallback`` (what to plan when V-bar is empty; the paper's reading: V-bar
+alone, so the walk over no node is s_k and the agent holds until a node decays below beta),
+``additions.exhaustion_claims`` (``NoClaims`` is the paper's reading) and
+``additions.drop_searched_nodes`` (``own_visits_only`` is the paper's).
 """
 
 import enum
-from typing import Mapping, Sequence
+from functools import partial
+from typing import Mapping, Optional, Sequence
 
 import numpy as np
 
 from sat_agent.actions import admissible_mask, candidate_poses
+from sat_agent.beyond_paper import drop_searched_nodes, exhaustion_claims, revisit_fallback
 from sat_agent.config import SatParams
-from sat_agent.search_map import nodes_in_view, nodes_to_search, SearchMap
+from sat_agent.search_map import nodes_in_view, SearchMap, unvisited_nodes
 from sat_agent.sensor_model import in_sensing_square
 
 # Costs are compared after rounding to this many decimals (1e-9 m): far below any distance
 # that matters, far above float64 rounding error on distances of a few km.
 COST_DECIMALS = 9
-# A node's search value only decays while nobody looks at it; a rise beyond float noise means an
-# agent searched it.
-REVISIT_MARGIN = 1e-6
 
 
 def _costs(head, points: np.ndarray) -> np.ndarray:
@@ -121,27 +126,40 @@ def walk_cost(start, centers: np.ndarray, walk: Sequence[int]) -> float:
     return float(np.sum(np.linalg.norm(np.diff(route, axis=0), axis=1)))
 
 
-def search_action(pose, goal, params: SatParams, keep_in_view=None) -> int:
+def action_costs(pose, goal, params: SatParams) -> np.ndarray:
+    """xi_search of every action: the distance from its pose to goal (rounded to 1e-9 m).
+
+    Inadmissible actions (Eqn. controlVectors, outside the area) cost inf.
+    """
+    distances = _costs(_point(goal), candidate_poses(_point(pose), params.actions))
+    distances[~admissible_mask(pose, params.actions, params.area)] = np.inf
+    return distances
+
+
+def search_action(pose, goal, params: SatParams) -> int:
     """Admissible action of Eqn. controlVectors whose pose is nearest to goal (xi_search).
 
-    keep_in_view: optional (K, 2) points the next sensing square must hold at least
-    ``cooperation.track_edge_margin`` inside its edges (a newborn's measurement is off by
-    sigma_r ~ 1 m); when some admissible action's square holds them all, the choice is limited
-    to those actions.
     Ties (after rounding to 1e-9 m) go to the lowest action index, so the agent stays when
     staying is as good as moving.
     """
-    poses = candidate_poses(_point(pose), params.actions)
-    distances = _costs(_point(goal), poses)
-    allowed = admissible_mask(pose, params.actions, params.area)
-    if keep_in_view is not None:
-        points = np.asarray(keep_in_view, dtype=float).reshape(-1, 2)
-        inner = params.sensor.square_side - 2.0 * params.cooperation.track_edge_margin
-        holding = in_sensing_square(points[None, :, :], poses[:, None, :], inner).all(axis=1)
-        if np.any(allowed & holding):
-            allowed &= holding
-    distances[~allowed] = np.inf
-    return int(np.argmin(distances))
+    return int(np.argmin(action_costs(pose, goal, params)))
+
+
+class NoClaims:
+    """The paper's reading of an exhaustion replan: plan over all of V-bar (no claims)."""
+
+    def remember(self, other_walks) -> None:
+        """Do nothing: no claims to remember."""
+
+    def unclaimed(self, nodes: np.ndarray) -> np.ndarray:
+        """Return every node: all are free."""
+        return nodes
+
+
+def own_visits_only(values: np.ndarray, planned: Optional[np.ndarray],
+                    beta: float) -> np.ndarray:
+    """Return a mask of none: in the paper only the agent's own visits leave the walk."""
+    return np.zeros(np.shape(values), dtype=bool)
 
 
 class ReplanReason(enum.IntEnum):
@@ -159,7 +177,8 @@ class SearchPlanner:
     """The agent's current closed walk, the group it was planned with and the replanning rules.
 
     Use: every step in SEARCH, ``mark_visited(pose)``; if ``needs_replan(group, released)``,
-    ``plan(own_id, starts, node_values)``; then steer to ``next_goal()`` with search_action.
+    ``plan(own_id, starts, node_values)``; then ``choose(pose)`` (search_action towards
+    ``next_goal()``).
 
     Replanning rules (``needs_replan``, in priority order, see ReplanReason):
     no plan yet; own return to SEARCH (``resumed=True``); a member of the plan's group left
@@ -170,10 +189,11 @@ class SearchPlanner:
     plan while apart, as in the paper.
 
     An exhaustion replan is made alone (the other members do not replan at that moment, so a
-    joint plan would not be shared): a walk over the unvisited nodes that no other member of
-    the last joint plan was given; when every such node is still claimed, a walk over all
-    unvisited nodes (and the claims are forgotten), so an agent never idles while nodes are
-    unvisited. It keeps the plan's group, so the members do not count as new neighbours.
+    joint plan would not be shared): a walk over the unvisited nodes, except those in view of
+    the agent (visited by the paper's definition: planning them gave a walk visited at once,
+    and an agent short of a node's far edge replanned that node at every step and hovered) and,
+    with additions.exhaustion_claims, those the last joint plan gave the other members while
+    others are left. It keeps the plan's group, so the members do not count as new neighbours.
     A joint replan plans over every unvisited node: nodes of a member out of range (groups of
     three or more) may then be searched twice; radio ranges are not transitive, and the paper
     leaves this case open.
@@ -185,9 +205,17 @@ class SearchPlanner:
         self._walk = np.zeros(0, dtype=np.int64)
         self._start = None
         self._group = frozenset()
-        self._claims = np.zeros(0, dtype=np.int64)
         self._planned = None     # every node's search value when the walk was planned
         self._reason = ReplanReason.NO_PLAN
+        search, additions = params.search, params.additions
+        self._nodes_to_search = (
+            partial(revisit_fallback.nodes_to_search, beta=search.unvisited_threshold,
+                    revisit_share=search.revisit_share) if additions.revisit_fallback
+            else partial(unvisited_nodes, beta=search.unvisited_threshold))
+        self._claims = (exhaustion_claims.Claims() if additions.exhaustion_claims
+                        else NoClaims())
+        self._searched_meanwhile = (drop_searched_nodes.searched_meanwhile
+                                    if additions.drop_searched_nodes else own_visits_only)
 
     @property
     def walk(self) -> tuple:
@@ -207,9 +235,8 @@ class SearchPlanner:
     def mark_visited(self, pose, node_values=None) -> np.ndarray:
         """Drop the walk's nodes whose centre is in the sensing square at pose; return them.
 
-        With node_values (fused search values), nodes another agent searched meanwhile are dropped
-        too: their value rose above beta and above the value they had when planned (nodes being
-        revisited, search.revisit_share, were planned above beta).
+        With node_values (fused search values) and additions.drop_searched_nodes, nodes another
+        agent searched meanwhile are dropped too (beyond_paper/drop_searched_nodes.py).
         """
         centers = self._map.centers[self._walk]
         visited = in_sensing_square(centers, _point(pose), self._params.sensor.square_side)
@@ -217,10 +244,9 @@ class SearchPlanner:
             values = np.asarray(node_values, dtype=float).reshape(-1)
             if values.size != self._map.size:
                 raise ValueError(f'{values.size} search values for {self._map.size} nodes')
-            threshold = np.full(self._walk.size, self._params.search.unvisited_threshold)
-            if self._planned is not None:
-                threshold = np.maximum(threshold, self._planned[self._walk] + REVISIT_MARGIN)
-            visited |= values[self._walk] > threshold
+            planned = None if self._planned is None else self._planned[self._walk]
+            visited |= self._searched_meanwhile(values[self._walk], planned,
+                                                self._params.search.unvisited_threshold)
         dropped = self._walk[visited]
         self._walk = self._walk[~visited]
         return dropped
@@ -261,15 +287,14 @@ class SearchPlanner:
         values = np.asarray(node_values, dtype=float).reshape(-1)
         if values.size != self._map.size:
             raise ValueError(f'{values.size} search values for {self._map.size} nodes')
-        search = self._params.search
         own_start = _point(starts[own_id])
         if self._reason == ReplanReason.EXHAUSTED:
             self._plan_alone(own_id, own_start, values)
         else:
-            nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
-            walks = planned_walks(starts, self._map.centers, nodes, search.planner)
+            walks = planned_walks(starts, self._map.centers, self._nodes_to_search(values),
+                                  self._params.search.planner)
             self._walk = np.asarray(walks.pop(int(own_id)), dtype=np.int64)
-            self._claims = np.asarray(sum(walks.values(), []), dtype=np.int64)
+            self._claims.remember(walks)
             self._group = frozenset(int(agent) for agent in starts)
         self._start = own_start
         self._planned = values.copy()
@@ -277,18 +302,12 @@ class SearchPlanner:
         return self._walk.tolist()
 
     def _plan_alone(self, own_id: int, start: np.ndarray, node_values: np.ndarray):
-        # The nodes in view are being searched now: planning them again would give a walk that
-        # is visited at once, and an agent short of a node's far edge would replan that same
-        # node at every step and never move.
+        # The nodes in view are visited (class docstring).
         values = node_values.copy()
         values[nodes_in_view(self._map, start, self._params.sensor.square_side)] = 1.0
-        search = self._params.search
-        nodes = nodes_to_search(values, search.unvisited_threshold, search.revisit_share)
-        unclaimed = np.setdiff1d(nodes, self._claims)
-        if not unclaimed.size:
-            unclaimed = nodes
-            self._claims = np.zeros(0, dtype=np.int64)
-        walks = planned_walks({own_id: start}, self._map.centers, unclaimed, search.planner)
+        nodes = self._claims.unclaimed(self._nodes_to_search(values))
+        walks = planned_walks({own_id: start}, self._map.centers, nodes,
+                              self._params.search.planner)
         self._walk = np.asarray(walks[own_id], dtype=np.int64)
         self._group = self._group | {int(own_id)}
 
@@ -297,6 +316,16 @@ class SearchPlanner:
         if self._walk.size:
             return self._map.centers[self._walk[0]].copy()
         return self.start
+
+    def choose(self, pose):
+        """Return (action, goal, plan): the search control towards the walk's next node.
+
+        The same move as the evaluation's baselines (baselines/); before any plan
+        the goal is pose (stay).
+        """
+        goal = self.next_goal()
+        goal = np.asarray(pose, dtype=float) if goal is None else goal
+        return search_action(pose, goal, self._params), goal, self.walk_points()
 
     def walk_points(self) -> np.ndarray:
         """(K, 2): the remaining nodes' centres in order, then the start closing the walk."""

@@ -1,47 +1,48 @@
 """Multi-target state extraction from the particle PHD (Section "Search-and-Track Density").
 
-The paper estimates n_hat(R) = round(integral of D^1 over R) targets in a region R and takes the
-n_hat highest peaks. Rounding the mass of the whole sensing square counts diffuse mass as a
-target: under dense clutter (10 false alarms per scan around the agent) every scan leaves small
-clouds of clutter-born mass (each < 0.5, together often > 0.5) scattered over the square. So
-the regions R here are the PHD's peaks: mass is counted per peak, and a peak stands for
-round(its mass) targets.
+The paper: n_hat(R) = round(integral of D^1 over R) targets in the sensing area R = S_a(s_k),
+and X-hat_k the n_hat highest peaks of the PHD, "as in the original PHD filter". The predicted
+multi-target state X-hat_{k|k-1} of the overlap test and the tracking control (Section
+"Multi-agent Tracking") is extracted the same way from the predicted PHD. There the paper
+integrates over the whole state space; that would count the diffuse birth mass spread over A
+(~1 at steady state: b = 0.01 per step, p_S = 0.99) as a target, so it is read over the sensing
+area as for X-hat_k (an interpretation).
 
-Within the extraction region (the sensing square grown by ``phd.extraction_margin``), with
-r = ``phd.peak_radius``:
+``NHatExtractor`` is the paper's extractor; ``beyond_paper.peak_extraction.PeakExtractor`` is
+the addition that replaces it (per-peak counting with track continuity,
+``additions.peak_extraction``). Both share, chosen once at construction (``Extractor``):
 
-1. continued targets first (track continuity, a choice the paper leaves open): for each target
-   extracted at k-1, in order, mean-shift from its predicted position x + v T over the
-   unclaimed particles within r; if the peak stays within ``phd.continue_gate`` and its region
-   (unclaimed particles within r) holds at least ``phd.continue_threshold``, the target
-   continues with max(1, floor(mass)) estimates and the region is claimed. Under dense
-   clutter a tracked target's mass settles at ~0.3-0.6 (0.99 - kappa / g_bar), so requiring
-   round(mass) >= 1 at every step would drop it every few steps;
-2. new peaks: the heaviest cell of the unclaimed weights binned on a ``PEAK_CELL`` grid and
-   smoothed over 3 x 3 cells, refined by weighted mean-shift within r (so diffuse mass nearby
-   does not drag it); its region stands for n = round(mass) targets (one estimate when n = 1,
-   n weighted k-means clusters otherwise). A new target needs most of its region's mass inside
-   the sensing square (mass beyond it is never corrected) and, when the caller passes the
-   tentative peaks
-   of k-1 (``candidates``), round(mass) >= 1 on ``phd.confirm_scans`` scans in a row at peaks
-   within ``phd.confirm_gate``: clutter-born clouds seldom stay that heavy twice. Lighter or
-   not yet confirmed peaks in the square with at least ``phd.tentative_threshold`` are
-   returned as ``tentative`` (not targets; the agent may look closer, agent_core);
-3. regions are claimed and the next peak is sought until the unclaimed mass is below the
-   lowest threshold that can still give a target or a tentative peak.
+- the region: S_a(s_k), or the square grown by ``phd.extraction_margin``
+  (``additions.extraction_margin``, beyond_paper/extraction_margin.py);
+- the confirmation rule: ``FirstEstimate``, the paper's (a peak is a target on its first
+  estimate, so the agent enters TRACK at once), or ``phd.confirm_scans`` scans in a row
+  (``additions.confirmation``, beyond_paper/confirmation.py);
+- peak finding (``PeakSearch``; the paper does not say how peaks of a particle PHD are found,
+  an interpretation): the heaviest cell of the unclaimed weights binned on a ``PEAK_CELL`` grid
+  and smoothed over 3 x 3 cells, refined by weighted mean-shift within r = ``phd.peak_radius``
+  (so diffuse mass nearby does not drag it); its region, the unclaimed particles within r, is
+  claimed before the next peak is sought, so peaks come densest first.
+
+An extractor holds the memory of its last posterior extraction (``ExtractionMemory``: where its
+targets and candidate peaks should be now, x + v T): ``extract`` gives X-hat_k from the
+posterior PHD and remembers; ``estimate`` gives the estimate of any PHD without remembering
+(X-hat_{k+1|k} from the predicted PHD for the tracking control).
 
 No random numbers are used and ties go to the lowest index, so the same PHD always gives the same
 estimate. Each estimate carries its cluster's weighted mean velocity, its weighted covariance
 (the spread) and its PHD mass (weight). ``cardinality`` is the mass of the whole region.
 """
 
+import abc
 from dataclasses import dataclass, field
-from typing import List, Optional, Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 from scipy import ndimage
 
 from sat_agent import motion_model, sensor_model
+from sat_agent.beyond_paper.confirmation import ScanConfirmation
+from sat_agent.beyond_paper.extraction_margin import extraction_side
 from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD
 
@@ -49,7 +50,6 @@ from sat_agent.phd_filter import ParticlePHD
 # resolve it.
 PEAK_CELL = 1.0
 MEAN_SHIFT_STEPS = 5
-LLOYD_ITERATIONS = 10
 # More peaks than any square can hold targets; bounds the loop on pathological input.
 MAX_PEAKS = 50
 
@@ -83,90 +83,136 @@ class MultiTargetEstimate:
         return np.array([target.position for target in self.targets])
 
 
-def extract_targets(phd: ParticlePHD, pose, params: SatParams,
-                    previous: Optional[np.ndarray] = None,
-                    candidates: Optional[np.ndarray] = None) -> MultiTargetEstimate:
-    """Estimate the targets around pose (see the module docstring).
+def predicted_positions(targets: Sequence[TargetEstimate], dt: float) -> np.ndarray:
+    """(n, 2) positions x + v T of the targets one step ahead."""
+    if not targets:
+        return np.zeros((0, 2))
+    return np.array([t.position + dt * t.velocity for t in targets], dtype=float)
 
-    previous: (n, 2) positions where the targets extracted at the last step are expected now
-    (x + v T); a peak within ``phd.continue_gate`` of one of them continues that target while
-    its region keeps at least ``phd.continue_threshold`` of mass. None or empty: no target
-    continues, every estimate needs round(mass) >= 1 and a peak inside the sensing square.
-    candidates: (positions (m, 2), streaks (m,)) of the tentative peaks of k-1, positions
-    predicted to k. When given (not None), a peak with round(mass) >= 1 becomes a new target
-    only on its ``phd.confirm_scans``-th scan in a row with round(mass) >= 1 (its streak: one
-    more than the longest streak of a candidate within ``phd.confirm_gate``); before that it
-    is a tentative peak with that streak. None: one scan is enough.
+
+@dataclass(frozen=True, eq=False)
+class ExtractionMemory:
+    """What an extraction at k-1 tells the next one, positions predicted to k (x + v T).
+
+    expected: the targets (track continuity); candidates and streaks: the peaks on their way
+    to confirmation with their scans in a row (the confirmation rule).
     """
-    phd_params = params.phd
-    radius = phd_params.peak_radius
-    side = params.sensor.square_side + 2.0 * phd_params.extraction_margin
-    points = motion_model.positions(phd.states)
-    region = sensor_model.in_sensing_square(points, pose, side)
-    mass = float(phd.weights[region].sum())
-    # The unclaimed particles: claimed regions are cut out, so later peaks scan fewer rows.
-    region &= phd.weights > 0.0
-    states, points, weights = phd.states[region], points[region], phd.weights[region]
-    origin = np.asarray(pose, dtype=float) - side / 2.0
-    estimates: List[TargetEstimate] = []
-    # Track continuity first: each target of k-1 looks for its peak from where it should be.
-    for guess in np.zeros((0, 2)) if previous is None else np.asarray(
-            previous, dtype=float).reshape(-1, 2):
-        peak = _mean_shift(points, weights, guess, radius)
-        member = np.hypot(*(points - peak).T) < radius
-        peak_mass = weights[member].sum()
-        if (np.hypot(*(peak - guess)) > phd_params.continue_gate
-                or peak_mass < phd_params.continue_threshold):
-            continue
-        # The PHD over-counts a tracked target under clutter (clutter points next to it add
-        # mass): a continued target splits in two only at a mass of 2, not 1.5.
-        estimates.extend(_estimates(states[member], points[member], weights[member], peak,
-                                    max(1, int(np.floor(peak_mass)))))
-        states, points, weights = states[~member], points[~member], weights[~member]
-    # New targets: round(mass) >= 1 around a peak inside the square; lighter peaks there with
-    # at least tentative_threshold are kept as tentative.
-    floor = min(0.5, phd_params.tentative_threshold)
-    tentative: List[TargetEstimate] = []
-    streaks: List[int] = []
-    for _ in range(MAX_PEAKS):
-        if weights.sum() < floor:
-            break
-        peak = _mean_shift(points, weights, _densest_cell(points, weights, origin, side),
-                           radius)
-        member = np.hypot(*(points - peak).T) < radius
-        peak_mass = weights[member].sum()
-        claimed = states[member], points[member], weights[member]
-        states, points, weights = states[~member], points[~member], weights[~member]
-        seen = sensor_model.in_sensing_square(claimed[1], pose, params.sensor.square_side)
-        if claimed[2][seen].sum() < 0.5 * peak_mass:
-            # Mass beyond the square (no p_D there, Eqn. sensing_model) is never corrected and
-            # only decays with p_S: it can continue a target but not make a new one.
-            continue
-        count = int(np.floor(peak_mass + 0.5))
-        streak = _streak(peak, candidates, phd_params.confirm_gate) if count >= 1 else 0
-        if count >= 1 and (candidates is None or streak >= phd_params.confirm_scans):
-            estimates.extend(_estimates(*claimed, peak, count))
-        elif peak_mass >= phd_params.tentative_threshold:
-            tentative.append(_summarise(claimed[0], claimed[2], peak))
-            streaks.append(streak)
-    return MultiTargetEstimate(tuple(estimates), mass, tuple(tentative), tuple(streaks))
+
+    expected: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    candidates: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    streaks: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
 
-def _streak(peak: np.ndarray, candidates, gate: float) -> int:
-    """Count the scans in a row with round(mass) >= 1 at this peak, this one included."""
-    if candidates is None or len(candidates[0]) == 0:
+class FirstEstimate:
+    """The paper's confirmation rule: a peak is a target on its first estimate."""
+
+    def streak(self, peak: np.ndarray, memory: ExtractionMemory) -> int:
+        """Return 1: every peak is on its first scan."""
         return 1
-    positions = np.asarray(candidates[0], dtype=float).reshape(-1, 2)
-    near = np.hypot(*(positions - peak).T) <= gate
-    return 1 + int(np.max(np.asarray(candidates[1])[near], initial=0))
+
+    def confirmed(self, streak: int) -> bool:
+        """Return True: every peak is a target."""
+        return True
 
 
-def _estimates(states: np.ndarray, points: np.ndarray, weights: np.ndarray, peak: np.ndarray,
-               count: int) -> List[TargetEstimate]:
-    """One estimate at the peak, or count of them by a weighted k-means of the region."""
-    if count == 1:
-        return [_summarise(states, weights, peak)]
-    return _split(states, points, weights, count)
+class PeakSearch:
+    """The particles of the extraction region, from which peaks are claimed one at a time."""
+
+    def __init__(self, phd: ParticlePHD, pose, side: float, radius: float):
+        points = motion_model.positions(phd.states)
+        region = sensor_model.in_sensing_square(points, pose, side)
+        self.mass = float(phd.weights[region].sum())
+        # The unclaimed particles: claimed regions are cut out, so later peaks scan fewer rows.
+        region &= phd.weights > 0.0
+        self.states, self.points, self.weights = (phd.states[region], points[region],
+                                                  phd.weights[region])
+        self._origin = np.asarray(pose, dtype=float) - side / 2.0
+        self._side = side
+        self._radius = radius
+
+    def unclaimed_mass(self) -> float:
+        """PHD mass of the particles not claimed yet."""
+        return self.weights.sum()
+
+    def around(self, guess: np.ndarray):
+        """Return (peak, member mask): the mean-shift peak from guess and its region."""
+        peak = _mean_shift(self.points, self.weights, guess, self._radius)
+        return peak, np.hypot(*(self.points - peak).T) < self._radius
+
+    def densest(self):
+        """Return (peak, member mask) of the densest unclaimed peak (module docstring)."""
+        return self.around(_densest_cell(self.points, self.weights, self._origin, self._side))
+
+    def claim(self, member: np.ndarray):
+        """Remove the member particles from the search; return their (states, points, weights)."""
+        claimed = self.states[member], self.points[member], self.weights[member]
+        self.states, self.points, self.weights = (
+            self.states[~member], self.points[~member], self.weights[~member])
+        return claimed
+
+
+class Extractor(abc.ABC):
+    """X-hat around the agent's pose from a particle PHD, with its memory (module docstring)."""
+
+    def __init__(self, params: SatParams, memory: Optional[ExtractionMemory] = None):
+        self.params = params
+        additions = params.additions
+        self.side = (extraction_side(params) if additions.extraction_margin
+                     else params.sensor.square_side)
+        self.confirmation = (ScanConfirmation(params.phd) if additions.confirmation
+                             else FirstEstimate())
+        self.memory = ExtractionMemory() if memory is None else memory
+
+    @abc.abstractmethod
+    def estimate(self, phd: ParticlePHD, pose) -> Tuple[MultiTargetEstimate, ExtractionMemory]:
+        """Return the estimate of phd around pose and the memory it would leave."""
+
+    def extract(self, phd: ParticlePHD, pose) -> MultiTargetEstimate:
+        """Return X-hat of the posterior phd around pose and remember it for the next step."""
+        estimate, self.memory = self.estimate(phd, pose)
+        return estimate
+
+
+class NHatExtractor(Extractor):
+    """The paper's X-hat: the n_hat = round(mass in the region) highest peaks.
+
+    Of the n_hat highest peaks, those the confirmation rule confirms are the targets and the
+    others tentative (with their streaks); beyond them, peaks of at least
+    ``phd.tentative_threshold`` are tentative too (streak 0), for additions.investigation.
+    """
+
+    def estimate(self, phd: ParticlePHD, pose) -> Tuple[MultiTargetEstimate, ExtractionMemory]:
+        """Return the estimate of phd around pose and the memory it would leave."""
+        phd_params = self.params.phd
+        search = PeakSearch(phd, pose, self.side, phd_params.peak_radius)
+        n_hat = int(np.floor(search.mass + 0.5))
+        targets, target_streaks, tentative, streaks = [], [], [], []
+        ranked = 0
+        for _ in range(MAX_PEAKS):
+            unclaimed = search.unclaimed_mass()
+            if not unclaimed > 0.0 or (ranked >= n_hat
+                                       and unclaimed < phd_params.tentative_threshold):
+                break
+            peak, member = search.densest()
+            states, _, weights = search.claim(member)
+            if not weights.sum() > 0.0:
+                break
+            if ranked < n_hat:
+                ranked += 1
+                streak = self.confirmation.streak(peak, self.memory)
+                confirmed = self.confirmation.confirmed(streak)
+            elif weights.sum() >= phd_params.tentative_threshold:
+                streak, confirmed = 0, False
+            else:
+                continue
+            (targets if confirmed else tentative).append(summarise(states, weights, peak))
+            (target_streaks if confirmed else streaks).append(streak)
+        dt = self.params.motion.dt
+        memory = ExtractionMemory(predicted_positions(targets, dt),
+                                  predicted_positions(targets + tentative, dt),
+                                  np.array(target_streaks + streaks, dtype=int))
+        return (MultiTargetEstimate(tuple(targets), search.mass, tuple(tentative),
+                                    tuple(streaks)), memory)
 
 
 def _densest_cell(points: np.ndarray, weights: np.ndarray, origin: np.ndarray,
@@ -197,33 +243,8 @@ def _mean_shift(points: np.ndarray, weights: np.ndarray, center: np.ndarray,
     return center
 
 
-def _split(states: np.ndarray, points: np.ndarray, weights: np.ndarray,
-           count: int) -> List[TargetEstimate]:
-    """Weighted k-means of one peak region into count targets (seeds: heaviest particles)."""
-    order = np.argsort(-weights, kind='stable')
-    centers = [points[order[0]]]
-    for index in order[1:]:
-        if len(centers) == count:
-            break
-        if min(np.hypot(*(np.array(centers) - points[index]).T)) > PEAK_CELL:
-            centers.append(points[index])
-    centers = np.array(centers)
-    for _ in range(LLOYD_ITERATIONS):
-        labels = np.argmin(np.linalg.norm(points[:, None, :] - centers[None], axis=2), axis=1)
-        mass = np.bincount(labels, weights=weights, minlength=len(centers))
-        moved = np.column_stack([
-            np.bincount(labels, weights=weights * points[:, axis], minlength=len(centers))
-            for axis in range(2)]) / np.where(mass > 0.0, mass, 1.0)[:, None]
-        moved[mass <= 0.0] = centers[mass <= 0.0]
-        if np.allclose(moved, centers, rtol=0.0, atol=1e-9):
-            break
-        centers = moved
-    labels = np.argmin(np.linalg.norm(points[:, None, :] - centers[None], axis=2), axis=1)
-    return [_summarise(states[labels == i], weights[labels == i], centers[i])
-            for i in range(len(centers)) if weights[labels == i].sum() > 0.0]
-
-
-def _summarise(states: np.ndarray, weights: np.ndarray, center: np.ndarray) -> TargetEstimate:
+def summarise(states: np.ndarray, weights: np.ndarray, center) -> TargetEstimate:
+    """One estimate at center: the particles' mean velocity, covariance and mass."""
     mass = float(weights.sum())
     mean = weights @ states / mass
     deviation = states - mean

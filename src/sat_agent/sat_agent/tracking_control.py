@@ -2,7 +2,9 @@
 
 For every admissible action u (Eqn. controlVectors) the predicted ideal measurement set
 Z_{k|k-1}(u) (Eqn. pims) is the noise-free h(x, u) of each predicted target that u's square
-would detect (the Gaussian g peaks at z = h(x, u), its sigmas depend on x, not on z). A pseudo
+would detect (the Gaussian g peaks at z = h(x, u), its sigmas depend on x, not on z; Eqn. pims
+lists every predicted target, but p_D is 0 outside the square, Eqn. sensing_model, so a target
+there yields no measurement: an interpretation). A pseudo
 update of the predicted PHD with Z_{k|k-1}(u) (Eqn. satphd_correct, ``update_weights``) gives
 D_hat_k(u), and the score is the Renyi divergence between the two Poisson multi-target densities:
 
@@ -11,20 +13,16 @@ D_hat_k(u), and the score is the Renyi divergence between the two Poisson multi-
 in particle form (both densities share the particles, D_hat = f D):
     xi(u) = sum w + alpha / (1 - alpha) sum w_hat - 1 / (1 - alpha) sum w^(1 - alpha) w_hat^alpha.
 
-Stand-off (a choice the paper leaves open): the argmax runs over the admissible actions that
-keep every predicted target at least ``cooperation.track_standoff`` from the agent and
-``cooperation.track_edge_margin`` inside the square (all admissible actions when none does).
-Under clutter uniform in [range, bearing] the clutter density in the plane is
-kappa / d per m^2: next to the agent a detection is barely distinguishable from clutter (and
-sigma_r = 1 m while the bearing says nothing in metres), so the Renyi score of the ideal
-measurement set, which ignores clutter realisations, would put the agent on top of the target
-where the real updates carry the least information; and a target near the edge is lost at the
-next step. Among the remaining actions the Renyi divergence decides, as in Eqn. track_control.
+The paper's control is the argmax of xi over the admissible actions (``every_action``). The
+addition ``additions.track_standoff`` limits the argmax to the actions keeping the targets at a
+stand-off inside the square (beyond_paper/track_standoff.py); it is chosen once, in
+``TrackingControl``.
 """
 
 import numpy as np
 
 from sat_agent import actions, motion_model, sensor_model
+from sat_agent.beyond_paper.track_standoff import standoff_mask
 from sat_agent.config import SatParams, SensorParams
 from sat_agent.phd_filter import ParticlePHD, update_weights
 from sat_agent.state_extraction import MultiTargetEstimate
@@ -54,40 +52,43 @@ def renyi_divergence(predicted_weights: np.ndarray, posterior_weights: np.ndarra
     return float(w.sum() + alpha / (1.0 - alpha) * w_hat.sum() - overlap / (1.0 - alpha))
 
 
-def tracking_action(predicted: ParticlePHD, estimates: MultiTargetEstimate, pose,
-                    params: SatParams):
-    """Return (action index, scores (n_actions,)) maximising Eqn. track_control.
-
-    Inadmissible actions score -inf. The argmax runs over the stand-off actions (module
-    docstring) when there are any. Ties go to the lowest index (np.argmax), so when no action
-    is informative (all scores 0) the agent stays (action 0) if staying keeps the stand-off.
-    """
-    sensor = params.sensor
-    poses = actions.candidate_poses(pose, params.actions)
-    allowed = actions.admissible_mask(pose, params.actions, params.area)
-    preferred = allowed & _standoff_mask(poses, estimates.positions(), params)
-    # Only particles some candidate square can see take part: the others keep their weight
-    # under every action and add exactly 0 to every score.
-    reach = sensor.square_side + 2.0 * float(np.max(np.abs(poses - np.asarray(pose, float))))
-    near = sensor_model.in_sensing_square(motion_model.positions(predicted.states), pose, reach)
-    states, weights = predicted.states[near], predicted.weights[near]
-    alpha = params.cooperation.renyi_alpha
-    scores = np.full(len(poses), -np.inf)
-    for action in np.flatnonzero(allowed):
-        z = predicted_ideal_measurements(estimates, poses[action], sensor)
-        posterior = update_weights(states, weights, z, poses[action], sensor)
-        scores[action] = renyi_divergence(weights, posterior, alpha)
-    if not preferred.any():
-        return int(np.argmax(scores)), scores
-    return int(np.argmax(np.where(preferred, scores, -np.inf))), scores
+def every_action(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> np.ndarray:
+    """Return a mask of every action: the paper's argmax runs over all admissible ones."""
+    return np.ones(len(poses), dtype=bool)
 
 
-def _standoff_mask(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> np.ndarray:
-    """Actions keeping every target within [standoff, a / 2 - edge margin] of the agent."""
-    if len(targets) == 0:
-        return np.ones(len(poses), dtype=bool)
-    offset = np.abs(targets[None, :, :] - poses[:, None, :])           # (U, n, 2)
-    inner = params.sensor.square_side / 2.0 - params.cooperation.track_edge_margin
-    in_square = np.max(offset, axis=2) <= inner
-    far_enough = np.hypot(offset[..., 0], offset[..., 1]) >= params.cooperation.track_standoff
-    return np.all(in_square & far_enough, axis=1)
+class TrackingControl:
+    """The tracking control of one agent, its action mask chosen once (module docstring)."""
+
+    def __init__(self, params: SatParams):
+        self.params = params
+        self._preferred = standoff_mask if params.additions.track_standoff else every_action
+
+    def action(self, predicted: ParticlePHD, estimates: MultiTargetEstimate, pose):
+        """Return (action index, scores (n_actions,)) maximising Eqn. track_control.
+
+        Inadmissible actions score -inf. The argmax runs over the admissible actions the mask
+        prefers when there are any, else over all admissible actions. Ties go to the lowest
+        index (np.argmax), so when no action is informative (all scores 0) the agent stays
+        (action 0) if staying is preferred.
+        """
+        params = self.params
+        sensor = params.sensor
+        poses = actions.candidate_poses(pose, params.actions)
+        allowed = actions.admissible_mask(pose, params.actions, params.area)
+        preferred = allowed & self._preferred(poses, estimates.positions(), params)
+        # Only particles some candidate square can see take part: the others keep their weight
+        # under every action and add exactly 0 to every score.
+        reach = sensor.square_side + 2.0 * float(np.max(np.abs(poses - np.asarray(pose, float))))
+        near = sensor_model.in_sensing_square(motion_model.positions(predicted.states), pose,
+                                              reach)
+        states, weights = predicted.states[near], predicted.weights[near]
+        alpha = params.cooperation.renyi_alpha
+        scores = np.full(len(poses), -np.inf)
+        for action in np.flatnonzero(allowed):
+            z = predicted_ideal_measurements(estimates, poses[action], sensor)
+            posterior = update_weights(states, weights, z, poses[action], sensor)
+            scores[action] = renyi_divergence(weights, posterior, alpha)
+        if not preferred.any():
+            return int(np.argmax(scores)), scores
+        return int(np.argmax(np.where(preferred, scores, -np.inf))), scores

@@ -1,242 +1,244 @@
-"""Monte Carlo evaluation: SAT-PHD against baselines over many seeds, in parallel, no ROS.
+"""Monte Carlo evaluation: SAT-PHD, its profiles, its ablation and baselines over many seeds.
 
 Every run is the in-process swarm (inprocess_swarm.run_swarm, the reference loop the ROS graph
-reproduces step for step) and is scored by metrics.compute_metrics, the code behind
-metrics.json. Every cell of the study runs the same seeds 1..N, so policies meet the same
-truth (common random numbers).
+reproduces step for step) or the oracle sweep (oracle_sweep.py), scored by
+metrics.compute_metrics, the code behind metrics.json. Every cell runs the same seeds, so
+configurations meet the same truth (common random numbers) and are compared seed by seed
+(paired_statistics.py). The settings, cells and designs are in study_design.py; the tables in
+evaluation_tables.py; the figures in evaluation_plots.py.
 
-Design: a full factorial (4 policies x 3 team sizes x 3 clutter rates x 4 radio ranges) does
-not fit 30 minutes on 2 cores, so the study is one-factor-at-a-time around two settings:
+Engine: with no ``--scheduler`` the runs go to a local process pool of ``--jobs`` processes
+(one BLAS thread each); ``--scheduler local`` starts a Dask LocalCluster (``--jobs`` worker
+processes, one thread each); ``--scheduler tcp://HOST:PORT`` submits them to a running Dask
+distributed cluster (its workers need this project's environment: ``scripts/with_env.sh dask
+worker tcp://HOST:PORT``). The longest runs go first. Before running, the study prints its run
+count and a wall-time estimate from measured per-run CPU costs (``--costs``, an earlier
+evaluation.csv; ``cost_model``).
 
-- ``paper``: the paper's scenario (config/scenarios/paper.yaml: 2 agents, 2 scripted targets,
-  lambda = 10, C_R = 50 m, 200 steps), the seed varying sensor noise, clutter and filter draws;
-- ``random``: the default random scenario: 4 agents starting anywhere, 2 to 10 targets
-  (uniform) born at uniform steps in [1, 150], living 50-150 steps, moving at constant velocity
-  (N(0, 0.5) m/s per axis) as the paper's targets do, lambda = 10, C_R = 50 m, 200 steps.
+Outputs in ``--out`` (docs/ by default): evaluation.csv (one row per run: CONFIG_COLUMNS, seed,
+METRICS), evaluation_targets.csv (one row per target), evaluation_summary.md (every table and
+how the study was made) and the figures; ``--readme`` writes the README's tables between its
+markers.
 
-At both settings, every policy on the same filter (search.policy/planner, comm range):
-SAT-PHD cooperative (the paper), SAT-PHD without radio (C_R = 0, non-cooperative), lawnmower,
-random walk and SAT-PHD with OR-Tools walks. Around the random default, SAT-PHD alone with one
-factor changed: 2 or 8 agents; lambda 0 or 30; C_R 25 m or unlimited (C_R = 0 is the
-no-radio baseline). 16 cells, --seeds each (20 by default).
-
-Run from the repository (defaults: config/paper.yaml, config/scenarios/paper.yaml). Outputs in
---out (docs/ by default): evaluation.csv (one row per run), evaluation_targets.csv
-(one row per target), evaluation_summary.md (mean +- std and N per cell) and the figures of
-evaluation_plots.py. The summary table is printed too.
-
-    evaluate [--seeds 20] [--jobs 2] [--out docs] [--readme README.md] [--quick]
+    evaluate [--design default|full|factorial] [--only SETTING/LABEL ...] [--seeds 50]
+             [--first-seed 1] [--jobs N] [--scheduler local|tcp://HOST:PORT] [--out docs]
+             [--config config] [--readme README.md] [--quick | --steps N] [--costs CSV]
+             [--dry-run] [--list]
 """
 
 import argparse
+from collections import defaultdict
 from concurrent.futures import as_completed, ProcessPoolExecutor
+from contextlib import contextmanager, ExitStack
 import csv
-from dataclasses import dataclass, replace
+import logging
+import multiprocessing
 import os
 from pathlib import Path
 import sys
 import time
-from typing import List, Sequence
+from typing import Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 from tqdm import tqdm
 
-from sat_agent.config import load_params_file, SatParams
+from sat_agent.config import SatParams
 
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.scenario import load_scenario, Scenario, scenario_from_mapping
+from sat_world_sim.oracle_sweep import run_oracle_sweep
+from sat_world_sim.scenario import load_scenario, Scenario, ScenarioError
+from sat_world_sim.study_design import catalogue, Cell, CONFIG_COLUMNS, DESIGNS, ORACLE
+from sat_world_sim.study_design import prepare_cells
+from sat_world_sim.study_design import scenario_for, SEEDS, select, STEPS, with_steps
 
-STEPS = 200
-# C_R standing for "unlimited": above the area's diagonal (141 m), so every pair is in range.
-UNLIMITED = 1000.0
-# Random scenarios draw from their own stream, apart from the world's and the agents' streams.
-SCENARIO_SALT = 0x5A7E
-TARGETS = (2, 10)
-BORN_LAST = 150
-LIFETIME = (50, 150)
-SPEED_STD = 0.5
-# As in the paper's scenario: near-constant velocity, arriving near the scripted end.
-TRUTH_PROCESS_NOISE = 1e-5
-# Agents start half a sensing square inside the area, so their first scan is all in the area.
-EDGE = 5.0
 QUICK_STEPS = 15
-
-POLICY_LABELS = {
-    ('sat', 'greedy', True): 'SAT-PHD (cooperative)',
-    ('sat', 'greedy', False): 'SAT-PHD, no radio',
-    ('lawnmower', 'greedy', True): 'lawnmower',
-    ('random_walk', 'greedy', True): 'random walk',
-    ('sat', 'ortools', True): 'SAT-PHD + OR-Tools',
-}
-
-# Columns of evaluation.csv: the configuration (Cell fields), the seed, then the metrics (names
-# of metrics.py's summary, plus the area searched at k = 100 and the run's wall time).
+# Columns of evaluation.csv after CONFIG_COLUMNS and the seed: metrics.py's summary, the area
+# searched at k = 100, the run's wall and CPU time. Every name holds one of the words by which
+# /work/shared/acceptance/issue-8-science.sh tells metrics from configuration (METRIC_WORDS).
 METRICS = ('mean_ospa', 'mean_ospa_loc', 'mean_ospa_card', 'mean_time_to_detection',
-           'detected_share', 'tracked_share', 'searched_pct_100', 'final_searched_pct',
-           'duplicate_tracking_steps', 'radio_msgs_per_agent_step', 'bytes_per_agent_step',
-           'targets_to_detect', 'wall_time_s')
-CONFIG_COLUMNS = ('setting', 'label', 'policy', 'planner', 'agents', 'clutter', 'comm_range',
-                  'steps')
+           'detected_share', 'entered_share', 'tracked_share', 'searched_pct_100',
+           'final_searched_pct', 'duplicate_tracking_steps', 'false_track_steps',
+           'radio_msgs_per_agent_step', 'bytes_per_agent_step', 'targets_to_detect',
+           'wall_time_s', 'cpu_time_s')
+# Columns of evaluation_targets.csv: the run, then metrics.json's per-target entry.
+TARGET_COLUMNS = ('setting', 'label', 'seed', 'id', 'born', 'died', 'first_in_view',
+                  'first_detected', 'detection_delay', 'time_to_detection')
+METRIC_WORDS = ('ospa', 'time', 'pct', 'detect', 'bytes', 'msgs', 'steps', 'tracked', 'dup',
+                'share', 'wall', 'false', 'ceiling')
+# Threads of the numerical libraries in each worker (unless set already): runs are parallel
+# across processes, and OpenBLAS's own threads on top of them made a run ~1.2x costlier in CPU
+# and ~1.4-2x in wall time (random default, seeds 1-3, one process on 2 cores).
+SINGLE_THREAD = dict.fromkeys(('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS'), '1')
 
 
-@dataclass(frozen=True)
-class Cell:
-    """One configuration of the study; label names it in tables and figures."""
-
-    setting: str            # 'paper' or 'random'
-    label: str
-    policy: str = 'sat'
-    planner: str = 'greedy'
-    agents: int = 4
-    clutter: float = 10.0
-    comm_range: float = 50.0
-    steps: int = STEPS
-
-    def params(self, base: SatParams) -> SatParams:
-        """Return the base parameters with this cell's policy, planner, clutter and radio range."""
-        return base.with_overrides({'search.policy': self.policy,
-                                    'search.planner': self.planner,
-                                    'sensor.clutter_rate': self.clutter,
-                                    'cooperation.comm_range': self.comm_range})
-
-
-def policy_cells(setting: str, agents: int) -> List[Cell]:
-    """Return every policy of the comparison at one setting (module docstring)."""
-    return [Cell(setting, label, policy, planner, agents, comm_range=50.0 if radio else 0.0)
-            for (policy, planner, radio), label in POLICY_LABELS.items()]
-
-
-def study_cells(steps: int = STEPS) -> List[Cell]:
-    """Return the 16 cells of the study (module docstring)."""
-    default = Cell('random', POLICY_LABELS[('sat', 'greedy', True)])
-    sweeps = [replace(default, label=f'{n} agents', agents=n) for n in (2, 8)]
-    sweeps += [replace(default, label=f'clutter {c:g}', clutter=float(c)) for c in (0, 30)]
-    sweeps += [replace(default, label='C_R 25 m', comm_range=25.0),
-               replace(default, label='C_R unlimited', comm_range=UNLIMITED)]
-    cells = policy_cells('paper', 2) + policy_cells('random', 4) + sweeps
-    return [replace(cell, steps=steps) for cell in cells]
-
-
-def random_scenario(seed: int, agents: int, steps: int, width: float = 100.0,
-                    height: float = 100.0) -> Scenario:
-    """Draw a scenario of random births and deaths (module docstring) from the seed alone."""
-    rng = np.random.default_rng(np.random.SeedSequence([SCENARIO_SALT, int(seed)]))
-    low, high = (EDGE, EDGE), (width - EDGE, height - EDGE)
-    starts = rng.uniform(low, high, size=(agents, 2))
-    count = int(rng.integers(TARGETS[0], TARGETS[1] + 1))
-    targets = []
-    for target_id in range(1, count + 1):
-        born = int(rng.integers(1, min(BORN_LAST, steps) + 1))
-        died = born + int(rng.integers(LIFETIME[0], LIFETIME[1] + 1)) - 1
-        start = rng.uniform((0.0, 0.0), (width, height))
-        end = np.clip(start + rng.normal(0.0, SPEED_STD, 2) * (died - born),
-                      (0.0, 0.0), (width, height))
-        targets.append({'id': target_id, 'born': born, 'died': died,
-                        'start': start.tolist(), 'end': end.tolist()})
-    return scenario_from_mapping({
-        'name': 'random', 'seed': int(seed), 'steps': int(steps),
-        'truth_process_noise': TRUTH_PROCESS_NOISE,
-        'agents': [{'id': i + 1, 'start': p.tolist()} for i, p in enumerate(starts)],
-        'targets': targets}, width, height)
-
-
-def scenario_for(cell: Cell, seed: int, base: SatParams, paper: Scenario) -> Scenario:
-    """Return the cell's scenario for one seed (paper: the paper's scenario, read once)."""
-    if cell.setting == 'paper':
-        return replace(paper.with_seed(seed), steps=cell.steps)
-    return random_scenario(seed, cell.agents, cell.steps, base.area.width, base.area.height)
-
-
-def run_one(cell: Cell, seed: int, base: SatParams, paper: Scenario) -> dict:
+def run_one(cell: Cell, seed: int, params: SatParams, paper: Scenario) -> dict:
     """Run one seed of one cell; return its CSV row, per-target rows and time series."""
-    scenario = scenario_for(cell, seed, base, paper)
-    run = run_swarm(scenario, cell.params(base))
+    started = time.process_time()
+    scenario = scenario_for(cell, seed, params, paper)
+    run = (run_oracle_sweep if cell.is_oracle else run_swarm)(scenario, params)
     metrics = compute_metrics(run.records, scenario.name, seed)
     steps = metrics['steps']
     summary = dict(metrics['summary'], wall_time_s=run.seconds,
-                   searched_pct_100=steps[min(100, len(steps)) - 1]['searched_pct'])
-    row = {name: getattr(cell, name) for name in CONFIG_COLUMNS}
-    row.update(seed=int(seed), **{name: summary[name] for name in METRICS})
+                   searched_pct_100=steps[min(100, len(steps)) - 1]['searched_pct'],
+                   cpu_time_s=time.process_time() - started)
+    row = dict(cell.columns(), seed=int(seed), **{name: summary[name] for name in METRICS})
     return {'row': row, 'cell': cell,
-            'targets': [dict(t, label=cell.label, setting=cell.setting, seed=int(seed))
+            'targets': [dict(setting=cell.setting, label=cell.label, seed=int(seed), **t)
                         for t in metrics['targets']],
             'ospa': np.array([s['ospa'] for s in steps]),
             'searched': np.array([s['searched_pct'] for s in steps])}
 
 
-def _cost(job) -> float:
-    """Rough relative cost of a job (agents x steps), to start the longest first."""
-    cell, _ = job
-    return cell.agents * cell.steps * (1.0 + cell.clutter / 30.0)
+# ---------------------------------------------------------------- costs and estimates
+
+def cost_model(rows: Sequence[dict]):
+    """Return cost(cell) -> estimated CPU seconds of one run, from measured rows.
+
+    A cell measured before costs its mean measured cost. Otherwise its agents x steps times
+    the measured CPU seconds per agent-step of the first of these groups with measured runs:
+    the same setting, policy, planner and clutter; the same setting, policy and planner; the
+    setting's SAT-PHD with greedy walks (profiles, the ablation and policies not measured yet
+    count as costing what SAT-PHD costs); the same policy and planner anywhere; every run.
+    Rows carry ``cpu_time_s`` (older studies: ``wall_time_s``). With no rows, the cost is None.
+    """
+    per_run, per_agent_step = defaultdict(list), defaultdict(list)
+    for row in rows:
+        seconds = row.get('cpu_time_s') or row.get('wall_time_s')
+        if seconds in (None, ''):
+            continue
+        per_run[_cell_key(row)].append(float(seconds))
+        rate = float(seconds) / (float(row['agents']) * float(row['steps']))
+        for key in _rate_keys(row, measured=True):
+            per_agent_step[key].append(rate)
+
+    def cost(cell: Cell) -> Optional[float]:
+        columns = cell.columns()
+        if _cell_key(columns) in per_run:
+            return float(np.mean(per_run[_cell_key(columns)]))
+        for key in _rate_keys(columns, measured=False):
+            if key in per_agent_step:
+                return float(np.mean(per_agent_step[key])) * cell.agents * cell.steps
+        return None
+    return cost
 
 
-def run_study(cells: Sequence[Cell], seeds: Sequence[int], base: SatParams, paper: Scenario,
-              jobs: int, progress: bool = True) -> List[dict]:
-    """Run every (cell, seed) over `jobs` processes; results in cell then seed order."""
-    work = sorted(((cell, seed) for cell in cells for seed in seeds), key=_cost, reverse=True)
+def _cell_key(columns) -> tuple:
+    return (columns['setting'], columns['label'], float(columns['agents']),
+            float(columns['clutter']), float(columns['comm_range']), float(columns['steps']))
+
+
+def _rate_keys(columns, measured: bool) -> List[tuple]:
+    """Return the groups of cost_model, most specific first (of a measured row or a cell)."""
+    setting, policy, planner = columns['setting'], columns['policy'], columns['planner']
+    keys = [('clutter', setting, policy, planner, float(columns['clutter'])),
+            ('kind', setting, policy, planner)]
+    if not measured and policy != ORACLE:
+        keys.append(('kind', setting, 'sat', 'greedy'))
+    return keys + [('policy', policy, planner), ('all',)]
+
+
+def read_rows(path) -> List[dict]:
+    """Rows of an evaluation.csv (none if the file does not exist)."""
+    if not Path(path).exists():
+        return []
+    with open(path, newline='', encoding='utf-8') as stream:
+        return list(csv.DictReader(stream))
+
+
+def estimate(cells: Sequence[Cell], seeds: int, jobs: int, cost) -> Tuple[int, Optional[float],
+                                                                          List[str]]:
+    """Return (runs, wall seconds estimated on `jobs` workers or None, unmeasured cells)."""
+    costs = {cell.name: cost(cell) for cell in cells}
+    unknown = [name for name, value in costs.items() if value is None]
+    known = [value for value in costs.values() if value is not None]
+    if not known:
+        return len(cells) * seeds, None, unknown
+    # Unmeasured cells are counted at the costliest measured cell's cost per run.
+    total = seeds * (sum(known) + len(unknown) * max(known))
+    return len(cells) * seeds, max(total / jobs, max(known)), unknown
+
+
+# ---------------------------------------------------------------- engine
+
+@contextmanager
+def executor(scheduler: Optional[str], jobs: int) -> Iterator:
+    """Yield a concurrent.futures executor: a process pool, a Dask LocalCluster or a cluster."""
+    if scheduler is None:
+        for name, value in SINGLE_THREAD.items():   # read by the spawned workers' numpy
+            os.environ.setdefault(name, value)
+        with ProcessPoolExecutor(max_workers=jobs,
+                                 mp_context=multiprocessing.get_context('spawn')) as pool:
+            yield pool
+        return
+    from distributed import Client, LocalCluster
+
+    with ExitStack() as stack:
+        if scheduler == 'local':
+            # Dask's nanny sets one BLAS thread per worker process (pre-spawn-environ).
+            cluster = stack.enter_context(LocalCluster(
+                n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
+                silence_logs=logging.ERROR))
+            client = stack.enter_context(Client(cluster))
+        else:
+            client = stack.enter_context(Client(scheduler))
+        yield client.get_executor(pure=False)
+
+
+def run_study(jobs_list: Sequence[Tuple[Cell, SatParams]], seeds: Sequence[int],
+              paper: Scenario, jobs: int, scheduler: Optional[str] = None, cost=None,
+              progress: bool = True) -> List[dict]:
+    """Run every (cell, seed) on the executor; results in cell then seed order."""
+    work = [(cell, params, seed) for cell, params in jobs_list for seed in seeds]
+    if cost is not None:
+        work.sort(key=lambda job: -(cost(job[0]) or 0.0))
     results = []
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
-        futures = [pool.submit(run_one, cell, seed, base, paper) for cell, seed in work]
+    with executor(scheduler, jobs) as pool:
+        futures = [pool.submit(run_one, cell, seed, params, paper)
+                   for cell, params, seed in work]
         for future in tqdm(as_completed(futures), total=len(futures), disable=not progress,
                            desc='runs', unit='run'):
             results.append(future.result())
-    order = {cell: index for index, cell in enumerate(cells)}
+    order = {cell: index for index, (cell, _) in enumerate(jobs_list)}
     return sorted(results, key=lambda r: (order[r['cell']], r['row']['seed']))
 
 
-def write_csv(rows: Sequence[dict], path: Path) -> None:
-    """Write dict rows with the keys of the first row as header."""
+# ---------------------------------------------------------------- outputs
+
+def write_csv(rows: Sequence[dict], path: Path, columns: Sequence[str]) -> None:
+    """Write dict rows under the given header."""
     with open(path, 'w', newline='', encoding='utf-8') as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
+        writer = csv.DictWriter(stream, fieldnames=list(columns))
         writer.writeheader()
         writer.writerows(rows)
 
 
-# The summary table: (header, CSV column, scale, decimals).
-TABLE = (('OSPA (m)', 'mean_ospa', 1.0, 2), ('loc. (m)', 'mean_ospa_loc', 1.0, 2),
-         ('card. (m)', 'mean_ospa_card', 1.0, 2),
-         ('time to detection (steps)', 'mean_time_to_detection', 1.0, 1),
-         ('detected %', 'detected_share', 100.0, 0), ('tracked %', 'tracked_share', 100.0, 0),
-         ('searched % k=100', 'searched_pct_100', 1.0, 1),
-         ('searched % final', 'final_searched_pct', 1.0, 1),
-         ('duplicate steps', 'duplicate_tracking_steps', 1.0, 1),
-         ('msgs/agent/step', 'radio_msgs_per_agent_step', 1.0, 2),
-         ('kB/agent/step', 'bytes_per_agent_step', 1e-3, 1))
-
-
-def summary_table(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
-    """Markdown table: one line per cell, mean +- std of each metric and N seeds."""
-    header = ['setting', 'configuration', 'N'] + [name for name, *_ in TABLE]
-    lines = ['| ' + ' | '.join(header) + ' |', '|' + ' --- |' * len(header)]
+def cost_table(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
+    """Markdown: per cell, mean CPU and wall seconds per run (what the next estimate uses)."""
+    lines = ['| setting | configuration | runs | CPU s/run | wall s/run |', '| --- | --- | --- '
+             '| --- | --- |']
     for cell in cells:
         mine = [r for r in rows if r['setting'] == cell.setting and r['label'] == cell.label]
-        values = [cell.setting, cell.label, str(len(mine))]
-        for _, column, scale, decimals in TABLE:
-            data = np.array([r[column] for r in mine if r[column] is not None], dtype=float)
-            values.append(_mean_std(scale * data, decimals))
-        lines.append('| ' + ' | '.join(values) + ' |')
+        lines.append(f'| {cell.setting} | {cell.label} | {len(mine)} | '
+                     f"{np.mean([r['cpu_time_s'] for r in mine]):.2f} | "
+                     f"{np.mean([r['wall_time_s'] for r in mine]):.2f} |")
     return '\n'.join(lines)
 
 
-def _mean_std(data: np.ndarray, decimals: int) -> str:
-    if not data.size:
-        return 'n/a'
-    return f'{np.mean(data):.{decimals}f} ± {np.std(data):.{decimals}f}'
+def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, tables: str,
+                  skipped: Sequence[Tuple[Cell, str]], seconds: float, command: str) -> None:
+    """Write evaluation_summary.md: how the study was made, every table, what was skipped."""
+    from sat_world_sim.evaluation_tables import summary_table
 
-
-def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, seconds: float,
-                  command: str) -> str:
-    """Write evaluation_summary.md (table and how it was made); return the table."""
-    table = summary_table(cells, rows)
+    skipped_text = ''.join(f'- {cell.name}: {reason}\n' for cell, reason in skipped) or '- none\n'
     path.write_text(
         '# Evaluation summary\n\n'
-        f'Mean ± std over N seeds per configuration; {len(rows)} runs in {seconds / 60:.1f} min '
-        f'on {os.cpu_count()} cores, made by `{command}` (`make evaluate` regenerates the whole '
-        'study); one row per run in evaluation.csv, the design in '
-        '`sat_world_sim/evaluate.py`.\n\n'
-        f'{table}\n', encoding='utf-8')
-    return table
+        f'{len(rows)} runs in {seconds / 60:.1f} min on {os.cpu_count()} cores, made by '
+        f'`{command}` (`make evaluate` regenerates the default study); one row per run in '
+        'evaluation.csv, the design in `sat_world_sim/study_design.py`.\n\n'
+        f'{tables}\n\n## Mean ± std per cell\n\n{summary_table(cells, rows)}\n\n'
+        f'## Cells skipped\n\n{skipped_text}\n'
+        f'## Cost per run\n\n{cost_table(cells, rows)}\n', encoding='utf-8')
 
 
 README_MARKERS = ('<!-- evaluation table: start (written by evaluate --readme) -->',
@@ -252,61 +254,119 @@ def _readme_parts(path: Path) -> tuple:
     return text[:start + len(README_MARKERS[0])], text[end:]
 
 
-def update_readme(path: Path, table: str) -> None:
-    """Replace the table between README_MARKERS in path, so the README shows the last study."""
+def update_readme(path: Path, tables: str) -> None:
+    """Replace the text between README_MARKERS in path, so the README shows the last study."""
     head, tail = _readme_parts(path)
-    path.write_text(f'{head}\n{table}\n{tail}', encoding='utf-8')
+    path.write_text(f'{head}\n{tables}\n{tail}', encoding='utf-8')
+
+
+# ---------------------------------------------------------------- command line
+
+def _arguments(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--design', choices=sorted(DESIGNS), default='default',
+                        help='which cells (study_design.py; default: the make evaluate study)')
+    parser.add_argument('--only', action='append', default=[], metavar='SETTING/LABEL',
+                        help="run this cell only (repeatable; any design's cell)")
+    parser.add_argument('--list', action='store_true', help='list every cell and exit')
+    parser.add_argument('--dry-run', action='store_true',
+                        help='print the run count and the wall-time estimate, run nothing')
+    parser.add_argument('--seeds', type=int, default=SEEDS, help=f'seeds per cell ({SEEDS})')
+    parser.add_argument('--first-seed', type=int, default=1,
+                        help='first seed (default 1; held-out seeds: 1001)')
+    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1,
+                        help='worker processes (default: every core)')
+    parser.add_argument('--scheduler', default=None,
+                        help="Dask scheduler address tcp://HOST:PORT, or 'local' for a "
+                             'LocalCluster of --jobs workers (default: a process pool)')
+    parser.add_argument('--out', default='docs', help='output directory (default: docs)')
+    parser.add_argument('--config', default='config',
+                        help='directory of the profiles (<profile>.yaml) and scenarios/paper.yaml')
+    parser.add_argument('--readme', default=None,
+                        help='also write the tables into this README (between markers)')
+    parser.add_argument('--costs', default='docs/evaluation.csv',
+                        help='an earlier evaluation.csv whose measured run costs give the '
+                             'wall-time estimate')
+    length = parser.add_mutually_exclusive_group()
+    length.add_argument('--quick', action='store_const', const=QUICK_STEPS, dest='steps',
+                        help=f'smoke test: {QUICK_STEPS} steps per run')
+    length.add_argument('--steps', type=int, help=f'steps per run ({STEPS})')
+    parser.set_defaults(steps=STEPS)
+    return parser.parse_args(argv)
+
+
+def _estimate_line(ran: Sequence[Cell], skipped: Sequence[Cell], args, cost) -> str:
+    runs, wall, unmeasured = estimate(ran, args.seeds, args.jobs, cost)
+    where = 'workers' if args.scheduler else 'processes'
+    if wall is None:
+        return (f'{len(ran)} cells x {args.seeds} seeds = {runs} runs of {args.steps} steps on '
+                f'{args.jobs} {where}; no measured run costs in {args.costs} for an estimate')
+    unmeasured = f'; {len(unmeasured)} cells unmeasured, counted as the costliest' \
+        if unmeasured else ''
+    line = (f'{len(ran)} cells x {args.seeds} seeds = {runs} runs of {args.steps} steps on '
+            f'{args.jobs} {where}: about {wall / 60:.0f} min (run costs measured in '
+            f'{args.costs}{unmeasured})')
+    if skipped:
+        _, wall_all, _ = estimate(list(ran) + list(skipped), args.seeds, args.jobs, cost)
+        line += f'; about {wall_all / 60:.0f} min once the {len(skipped)} skipped cells can run'
+    return line
 
 
 def main(argv=None) -> int:
     """Command-line entry point (module docstring)."""
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--seeds', type=int, default=20, help='seeds per cell (1..N)')
-    parser.add_argument('--jobs', type=int, default=os.cpu_count() or 1,
-                        help='worker processes (default: every core)')
-    parser.add_argument('--out', default='docs', help='output directory (default: docs)')
-    parser.add_argument('--params', default='config/paper.yaml',
-                        help='ROS 2 parameter file of the base parameters')
-    parser.add_argument('--scenario', default='config/scenarios/paper.yaml',
-                        help="the paper's scenario file")
-    parser.add_argument('--readme', default=None,
-                        help='also write the summary table into this README (between markers)')
-    parser.add_argument('--quick', action='store_true',
-                        help=f'smoke test: {QUICK_STEPS} steps per run (every cell, --seeds)')
-    args = parser.parse_args(argv)
-    if args.seeds < 1 or args.jobs < 1:
-        print(f'error: --seeds = {args.seeds} and --jobs = {args.jobs}: both must be >= 1',
-              file=sys.stderr)
-        return 2
+    args = _arguments(argv)
+    if args.list:
+        print('\n'.join(f'{cell.name}  [{", ".join(n for n, cs in DESIGNS.items() if cell in cs)}]'
+                        for cell in catalogue()))
+        return 0
+    problems = [f'{name} = {value}: must be >= {low}' for name, value, low in (
+        ('--seeds', args.seeds, 1), ('--jobs', args.jobs, 1), ('--first-seed', args.first_seed, 0),
+        ('--steps', args.steps, 1))
+        if value < low]
     try:
-        base = load_params_file(args.params)
-        paper = load_scenario(args.scenario, base.area.width, base.area.height)
+        if problems:
+            raise ValueError('; '.join(problems))
+        cells = with_steps(select(args.only) if args.only else DESIGNS[args.design], args.steps)
+        paper = load_scenario(Path(args.config) / 'scenarios' / 'paper.yaml')
         if args.readme:
             _readme_parts(Path(args.readme))   # refuse a README without markers before the runs
-    except (ValueError, OSError) as error:
+    except (ValueError, OSError, ScenarioError) as error:
         print(f'error: {error}', file=sys.stderr)
         return 2
+    runnable, skipped = prepare_cells(cells, args.config)
+    for cell, reason in skipped:
+        print(f'skipped {cell.name}: {reason}', file=sys.stderr)
+    if not runnable:
+        print('error: no cell can run (see the skipped cells above)', file=sys.stderr)
+        return 2
+    ran = [cell for cell, _ in runnable]
+    cost = cost_model(read_rows(args.costs))
+    print(_estimate_line(ran, [cell for cell, _ in skipped], args, cost), file=sys.stderr)
+    if args.dry_run:
+        return 0
     # Imported here: the figures need matplotlib, the worker processes do not.
     from sat_world_sim.evaluation_plots import write_figures
+    from sat_world_sim.evaluation_tables import study_tables
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    cells = study_cells(QUICK_STEPS if args.quick else STEPS)
     started = time.perf_counter()
-    results = run_study(cells, range(1, args.seeds + 1), base, paper, args.jobs,
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
+    results = run_study(runnable, seeds, paper, args.jobs, args.scheduler, cost,
                         progress=sys.stderr.isatty())
     rows = [r['row'] for r in results]
-    write_csv(rows, out / 'evaluation.csv')
-    write_csv([t for r in results for t in r['targets']], out / 'evaluation_targets.csv')
-    figures = write_figures(cells, results, out)
+    write_csv(rows, out / 'evaluation.csv', CONFIG_COLUMNS + ('seed',) + METRICS)
+    write_csv([t for r in results for t in r['targets']], out / 'evaluation_targets.csv',
+              TARGET_COLUMNS)
+    figures = write_figures(ran, results, out)
+    tables = study_tables(ran, rows)
     seconds = time.perf_counter() - started
     given = sys.argv[1:] if argv is None else list(argv)
-    command = ' '.join(['evaluate'] + given)
-
-    table = write_summary(cells, rows, out / 'evaluation_summary.md', seconds, command)
+    write_summary(ran, rows, out / 'evaluation_summary.md', tables, skipped, seconds,
+                  ' '.join(['evaluate'] + given))
     if args.readme:
-        update_readme(Path(args.readme), table)
-    print(table)
+        update_readme(Path(args.readme), tables)
+    print(tables)
     print(f'{len(rows)} runs in {seconds:.0f} s; wrote {out / "evaluation.csv"}, '
           f'{out / "evaluation_summary.md"} and {len(figures)} figures', file=sys.stderr)
     return 0

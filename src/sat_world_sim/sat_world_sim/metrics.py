@@ -25,6 +25,11 @@ Definitions (the paper leaves them open):
   ``first_detected`` None), so policies that miss targets are not rewarded for it.
 - Tracked target at step k: some agent's estimate assigned to it (``n_tracked``); tracked by
   two or more agents at once: a duplicate (``n_duplicate``).
+- False track at step k: an agent's estimate assigned to no true target (``n_false``, summed
+  over agents); ``false_track_steps`` counts the steps with at least one.
+- ``entered_share``: the share of the run's targets whose true position was inside some
+  agent's sensing square at some step (``first_in_view`` not None): what the search offered
+  the detector, whatever the detector made of it.
 - ``born`` / ``died``: first and last step the target is alive in the records (``died`` is None
   when it is still alive at the last recorded step).
 """
@@ -138,7 +143,7 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
     truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
     estimate = swarm_estimate(record.estimates, config.merge_distance)
     result = ospa(truth, estimate, config.cutoff, config.order)
-    trackers = _trackers(truth, record.estimates, config.detection_radius)
+    trackers, false = _trackers(truth, record.estimates, config.detection_radius)
     modes = {str(a): str(record.modes[a]) for a in sorted(record.modes)}
     return {
         'step': int(record.step),
@@ -152,6 +157,7 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
         'modes': modes,
         'n_tracked': int(np.count_nonzero(trackers >= 1)),
         'n_duplicate': int(np.count_nonzero(trackers >= 2)),
+        'n_false': false,
     }
 
 
@@ -162,7 +168,7 @@ def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig) -> Lis
         ids = np.asarray(record.truth_ids, dtype=int).reshape(-1)
         truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
         in_view = _in_any_square(truth, record.agent_poses, config.sensor_side)
-        detected = _trackers(truth, record.estimates, config.detection_radius) > 0
+        detected = _trackers(truth, record.estimates, config.detection_radius)[0] > 0
         for row, target_id in enumerate(ids.tolist()):
             entry = targets.setdefault(target_id, {'id': target_id, 'born': record.step,
                                                    'died': None, 'first_in_view': None,
@@ -194,17 +200,25 @@ def _in_any_square(points: np.ndarray, poses: Mapping[int, np.ndarray], side: fl
 
 
 def _trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
-    """Per true point, how many agents have an estimate assigned to it (module docstring)."""
+    """Count per true point the agents with an estimate assigned to it, and the false estimates.
+
+    Returns (counts per point, estimates of all agents assigned to no point); module docstring.
+    """
     counts = np.zeros(len(points), dtype=int)
+    false = 0
     for estimate in estimates.values():
         found = np.asarray(estimate, dtype=float).reshape(-1, 2)
+        assigned = 0
         if len(points) and len(found):
             gaps = np.linalg.norm(points[:, None, :] - found[None, :, :], axis=2)
             # Beyond the radius an assignment is worth nothing: a cost above any sum within it.
             cost = np.where(gaps <= radius, gaps, radius * (len(points) + len(found) + 1))
             rows, cols = linear_sum_assignment(cost)
-            counts[rows[gaps[rows, cols] <= radius]] += 1
-    return counts
+            hits = rows[gaps[rows, cols] <= radius]
+            counts[hits] += 1
+            assigned = len(hits)
+        false += len(found) - assigned
+    return counts, false
 
 
 def _radio_metrics(records: Sequence[StepRecord]) -> dict:
@@ -230,9 +244,12 @@ def _summary(steps: List[dict], targets: List[dict], radio: dict) -> dict:
         'targets_to_detect': len(targets),
         'detected_share': _share(sum(t['first_detected'] is not None for t in targets),
                                  len(targets)),
+        'entered_share': _share(sum(t['first_in_view'] is not None for t in targets),
+                                len(targets)),
         'mean_time_to_detection': _mean([t['time_to_detection'] for t in targets]),
         'tracked_share': _share(sum(s['n_tracked'] for s in steps), target_steps),
         'duplicate_tracking_steps': sum(1 for s in steps if s['n_duplicate']),
+        'false_track_steps': sum(1 for s in steps if s['n_false']),
         'radio_msgs_per_agent_step': sum(r['messages'] for r in radio.values()) / agent_steps,
         'bytes_per_agent_step': sum(r['bytes'] for r in radio.values()) / agent_steps,
     }

@@ -145,6 +145,19 @@ class World:
         self._mark_coverage()
         return results
 
+    def place_agents(self, poses: Mapping[int, np.ndarray]) -> None:
+        """Put every agent at the given position, bypassing the action set; mark coverage.
+
+        For references that are not bound to Eqn. controlVectors (the evaluation's oracle
+        sweep, oracle_sweep.py). Positions outside the area raise ValueError.
+        """
+        points = np.array([poses[agent_id] for agent_id in self.agent_ids], dtype=float)
+        if not inside_area(points, self.params.area).all():
+            raise ValueError(f'place_agents: positions {points.tolist()} leave the area '
+                             f'[0, {self.params.area.width}] x [0, {self.params.area.height}]')
+        self._poses = dict(zip(self.agent_ids, points))
+        self._mark_coverage()
+
     def advance(self) -> None:
         """Move the truth from step k to k + 1: deaths, NCV motion with reflection, births."""
         next_step = self.step + 1

@@ -1,0 +1,124 @@
+"""Addition: a searching agent looks closer at tentative peaks and newborn spots.
+
+Paper: an agent searches (follows its closed walk, control "b) Control" of Section
+"Multi-agent Searching") until targets are found, then tracks; it has nothing in between.
+Addition: a searching agent that sees a tentative peak (an unconfirmed PHD peak, state
+extraction) holds its walk for up to ``search.investigate_steps`` steps and places itself with
+the tracking control (Eqn. track_control, with its stand-off when additions.track_standoff is
+on) on that peak; a target then reaches the confirmation and the agent enters TRACK, a clutter
+cloud fades and the walk resumes. One spot at a time, the heaviest; the spot of a spent budget
+is abandoned: tentative peaks near it (within ``phd.continue_gate``) are ignored for
+2 * investigate_steps steps. Without a tentative peak, the heaviest newborn spot of this scan
+(a measurement seeding at least ``phd.tentative_threshold`` of birth mass) gets one step of the
+budget, spent on the search move that keeps the spot ``cooperation.track_edge_margin`` inside
+the next square (``keep_in_view_action``): a real target is then a tentative peak at the next
+scan, a false alarm leaves nothing and the walk resumes at once. Nothing is looked at during
+the rejoin cooldown after an overlap exit.
+Why: one pass of a searching agent gives a target 2-3 scans, too few to confirm it under
+clutter (a tracked target's PHD mass grows by ~1 + g / kappa per scan, and not at all while
+the agent flies over it); and newborns the next square does not cover are dropped
+(additions.newborn_gate), so a target seen once at the trailing edge of a passing square would
+otherwise be forgotten.
+Switch: ``additions.investigation`` (off: agent_core.NoInvestigation, no look).
+"""
+
+from dataclasses import dataclass, replace
+from typing import Optional, Sequence
+
+import numpy as np
+
+from sat_agent.actions import admissible_mask, candidate_poses
+from sat_agent.config import SatParams
+from sat_agent.mode_machine import Mode
+from sat_agent.phd_filter import BirthSpots
+from sat_agent.search_planning import action_costs
+from sat_agent.sensor_model import in_sensing_square
+from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
+
+
+@dataclass(frozen=True, eq=False)
+class Look:
+    """What a searching agent looks at this step instead of following its walk alone.
+
+    peaks: positions X-hat_{k+1|k} to track with the tracking control (the walk holds);
+    keep: (K, 2) points the search move must keep in the next square. Both None: no look.
+    """
+
+    peaks: Optional[MultiTargetEstimate] = None
+    keep: Optional[np.ndarray] = None
+
+
+NO_LOOK = Look()
+
+
+class Investigation:
+    """Looks at tentative peaks and newborn spots from SEARCH (module docstring)."""
+
+    def __init__(self, params: SatParams):
+        self.params = params
+        self._investigated = 0       # steps spent on the current spot
+        self._abandoned: list = []   # (position, steps left) of spots given up on
+        self._look: tuple = ()
+        self._looking_at_newborn = False
+
+    def look(self, mode: Mode, estimate: MultiTargetEstimate, cooldown_left: int,
+             birth_spots: BirthSpots) -> Look:
+        """Return what to look at this step (positions one step ahead), or NO_LOOK."""
+        budget = self.params.search.investigate_steps
+        self._abandoned = [(p, t - 1) for p, t in self._abandoned if t > 1]
+        if mode != Mode.SEARCH or cooldown_left > 0:
+            self._investigated = 0
+            return NO_LOOK
+        fresh = self._fresh(estimate.tentative)
+        if fresh:
+            look = (max(fresh, key=lambda t: t.weight),)   # the heaviest spot first
+        elif self._investigated > 0 and not self._looking_at_newborn:
+            look = self._look      # a peak can fade for a scan (a miss, a near pass): keep on
+        else:
+            self._investigated = 0
+            look = self._fresh(self._newborn_spots(birth_spots))[:1]
+            if not look:
+                return NO_LOOK
+        if self._investigated >= budget:
+            self._abandoned += [(t.position, 2 * budget) for t in look]
+            self._investigated = 0
+            return NO_LOOK
+        self._looking_at_newborn = not fresh
+        self._investigated += 1
+        dt = self.params.motion.dt
+        self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
+        ahead = MultiTargetEstimate(self._look, 0.0)
+        return Look(keep=ahead.positions()) if self._looking_at_newborn else Look(peaks=ahead)
+
+    def _fresh(self, spots: Sequence[TargetEstimate]) -> tuple:
+        """Return the spots farther than phd.continue_gate from every abandoned spot."""
+        gate = self.params.phd.continue_gate
+        return tuple(t for t in spots if not any(
+            np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
+
+    def _newborn_spots(self, spots: BirthSpots) -> tuple:
+        """Return this scan's birth spots of at least phd.tentative_threshold, heaviest first."""
+        order = np.argsort(-spots.masses, kind='stable')
+        order = order[spots.masses[order] >= self.params.phd.tentative_threshold]
+        return tuple(TargetEstimate(spots.positions[i].copy(), np.zeros(2), np.zeros((4, 4)),
+                                    float(spots.masses[i])) for i in order)
+
+
+def keep_in_view_action(pose, goal, params: SatParams, keep: np.ndarray) -> int:
+    """Return the search control's action (search_planning.search_action) keeping points in view.
+
+    keep: (K, 2) points the next sensing square must hold at least
+    ``cooperation.track_edge_margin`` inside its edges (a newborn's measurement is off by
+    sigma_r ~ 1 m); when no admissible action's square holds them all, no limit. Ties go to the
+    lowest action index.
+    """
+    pose = np.asarray(pose, dtype=float).reshape(2)
+    poses = candidate_poses(pose, params.actions)
+    distances = action_costs(pose, goal, params)
+    allowed = admissible_mask(pose, params.actions, params.area)
+    points = np.asarray(keep, dtype=float).reshape(-1, 2)
+    inner = params.sensor.square_side - 2.0 * params.cooperation.track_edge_margin
+    holding = in_sensing_square(points[None, :, :], poses[:, None, :], inner).all(axis=1)
+    if np.any(allowed & holding):
+        distances[~holding] = np.inf
+    return int(np.argmin(distances))

@@ -1,0 +1,33 @@
+"""Addition: after leaving TRACK because of an overlap, ignore targets for a while.
+
+Paper: when two agents track the same targets, one of them "generates a search plan and begins
+in the next time-step to search" (Section "Multi-agent Tracking", a); an agent in SEARCH
+switches to TRACK when it estimates targets.
+Addition: the leaver ignores its estimated targets (stays in SEARCH, looks at nothing) for
+``cooperation.rejoin_cooldown`` steps.
+Why: the leaver still sees the abandoned targets for a few steps while it flies off; re-entering
+TRACK then would undo the overlap resolution, and the two agents would overlap again. The mode
+machine only sees target counts, so the cooldown is on time, not on target identity: 10 steps
+by default, during which the agent flies up to N_R Delta_R = 4 m per step, far more than the
+a / 2 + extraction margin = 10 m it takes to get the abandoned targets out of view.
+Switch: ``additions.rejoin_cooldown`` (off: mode_machine.NoCooldown).
+"""
+
+
+class RejoinCooldown:
+    """Counts the steps during which estimated targets are ignored after an overlap exit."""
+
+    def __init__(self, steps: int):
+        self._steps = int(steps)
+        self.left = 0
+
+    def start(self) -> None:
+        """Start counting: the agent has just left TRACK because of an overlap."""
+        self.left = self._steps
+
+    def hold(self) -> bool:
+        """Count one step in SEARCH; return whether targets are still ignored at this step."""
+        if self.left > 0:
+            self.left -= 1
+            return True
+        return False

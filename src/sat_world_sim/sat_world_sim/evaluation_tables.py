@@ -1,0 +1,198 @@
+"""Markdown tables of the evaluation (evaluate.py): what the README and the summary show.
+
+- ``summary_table``: every cell, mean ± std over its seeds of every metric, and N.
+- ``paired_table``: per cell the mean of chosen metrics and its paired difference to the cell's
+  reference (study_design.reference_of, cooperative SAT-PHD), "mean (Δ [95 % CI])" with a mark
+  when the Wilcoxon signed-rank p < 0.01 (paired_statistics.py); optionally the detected share
+  as a fraction of the oracle sweep's of the same setting and team, with its 95 % CI.
+- ``study_tables``: the README's block: legend, the main table (policies and profiles), the
+  ablation (reference, strict, each addition off alone) and the sweeps when they ran.
+
+Tables, not claims: prose goes around them, written by people who read them.
+"""
+
+from collections import defaultdict
+import math
+from typing import Dict, List, Optional, Sequence
+
+import numpy as np
+
+from sat_world_sim.paired_statistics import ALPHA, paired_difference, paired_values
+from sat_world_sim.paired_statistics import ratio_of_means
+from sat_world_sim.study_design import ADDITIONS_GROUP, ceiling_of, Cell, factorial_cells
+from sat_world_sim.study_design import is_setting_reference, reference_of, STRICT_PROFILE
+from sat_world_sim.study_design import sweep_cells
+
+MARK = '*'
+
+# (header, CSV column, scale, decimals) of the summary table.
+SUMMARY = (('OSPA (m)', 'mean_ospa', 1.0, 2), ('loc. (m)', 'mean_ospa_loc', 1.0, 2),
+           ('card. (m)', 'mean_ospa_card', 1.0, 2),
+           ('time to detection (steps)', 'mean_time_to_detection', 1.0, 1),
+           ('detected %', 'detected_share', 100.0, 0), ('entered %', 'entered_share', 100.0, 0),
+           ('tracked %', 'tracked_share', 100.0, 0),
+           ('searched % k=100', 'searched_pct_100', 1.0, 1),
+           ('searched % final', 'final_searched_pct', 1.0, 1),
+           ('duplicate steps', 'duplicate_tracking_steps', 1.0, 1),
+           ('false-track steps', 'false_track_steps', 1.0, 1),
+           ('msgs/agent/step', 'radio_msgs_per_agent_step', 1.0, 2),
+           ('kB/agent/step', 'bytes_per_agent_step', 1e-3, 1),
+           ('CPU s/run', 'cpu_time_s', 1.0, 1))
+MAIN = (('detected %', 'detected_share', 100.0, 0), ('entered %', 'entered_share', 100.0, 0),
+        ('OSPA (m)', 'mean_ospa', 1.0, 2),
+        ('tracked %', 'tracked_share', 100.0, 0),
+        ('searched % k=100', 'searched_pct_100', 1.0, 0),
+        ('false-track steps', 'false_track_steps', 1.0, 1))
+ABLATION = (('detected %', 'detected_share', 100.0, 0), ('OSPA (m)', 'mean_ospa', 1.0, 2),
+            ('searched % k=100', 'searched_pct_100', 1.0, 0),
+            ('false-track steps', 'false_track_steps', 1.0, 1))
+LEGEND = ('Each entry: mean over N seeds (Δ: paired difference to SAT-PHD (cooperative) of the '
+          'same setting on the same seeds, with its 95 % CI from a bootstrap over seeds); '
+          f'{MARK}: Wilcoxon signed-rank p < {ALPHA:g}. "of ceiling": detected share as a '
+          "fraction of the oracle sweep's (same setting and team), 95 % CI.")
+
+
+def by_seed(rows: Sequence[dict]) -> Dict[str, Dict[str, Dict[int, Optional[float]]]]:
+    """{SETTING/LABEL: {column: {seed: value}}} of evaluation.csv's rows."""
+    table: Dict[str, Dict[str, Dict[int, Optional[float]]]] = defaultdict(
+        lambda: defaultdict(dict))
+    for row in rows:
+        for column, value in row.items():
+            table[f"{row['setting']}/{row['label']}"][column][int(row['seed'])] = _number(value)
+    return table
+
+
+def summary_table(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
+    """Every cell: mean ± std of every metric of SUMMARY, and N seeds."""
+    data = by_seed(rows)
+    header = ['setting', 'configuration', 'N'] + [name for name, *_ in SUMMARY]
+    lines = _header(header)
+    for cell in cells:
+        mine = data[cell.name]
+        entries = [cell.setting, cell.label, str(len(mine['seed']))]
+        for _, column, scale, decimals in SUMMARY:
+            values = np.array([v for v in mine[column].values() if _finite(v)], dtype=float)
+            entries.append(_mean_std(scale * values, decimals))
+        lines.append(_line(entries))
+    return '\n'.join(lines)
+
+
+def paired_table(cells: Sequence[Cell], rows: Sequence[dict], metrics=MAIN,
+                 study: Optional[Sequence[Cell]] = None, ceiling: bool = True) -> str:
+    """Per cell: N, each metric "mean (Δ [CI] mark)" and the fraction of the ceiling."""
+    study = cells if study is None else study
+    data = by_seed(rows)
+    header = ['setting', 'configuration', 'N'] + [name for name, *_ in metrics]
+    lines = _header(header + (['of ceiling'] if ceiling else []))
+    for cell in cells:
+        mine = data[cell.name]
+        reference = reference_of(cell, study)
+        entries = [cell.setting, cell.label, str(len(mine['seed']))]
+        for _, column, scale, decimals in metrics:
+            if reference is not None:
+                entries.append(_paired_entry(mine[column], data[reference.name][column],
+                                             scale, decimals))
+            else:
+                entries.append(_mean_entry(mine[column], scale, decimals)
+                               + (' (ref.)' if is_setting_reference(cell) else ''))
+        if ceiling:
+            oracle = ceiling_of(cell, study)
+            entries.append('n/a' if oracle is None else _ratio_entry(
+                mine['detected_share'], data[oracle.name]['detected_share']))
+        lines.append(_line(entries))
+    return '\n'.join(lines)
+
+
+def table_cells(cells: Sequence[Cell]) -> Dict[str, List[Cell]]:
+    """Split the study's cells into the README's tables: main, ablation, sweeps, factorial.
+
+    The ablation table of a setting also shows its reference and strict cells.
+    """
+    sweeps = {c.name for c in sweep_cells()}
+    factorial = {c.name for c in factorial_cells()}
+    ablated = {c.name for c in cells
+               if any(key.startswith(f'{ADDITIONS_GROUP}.') for key, _ in c.overrides)}
+    settings = {c.setting for c in cells if c.name in ablated}
+    ablation = [c for c in cells if c.name in ablated or (c.setting in settings and (
+        c.profile == STRICT_PROFILE or is_setting_reference(c)))]
+    return {'main': [c for c in cells if not {c.name} & (ablated | sweeps | factorial)],
+            'ablation': ablation,
+            'sweeps': [c for c in cells if c.name in sweeps],
+            'factorial': [c for c in cells if c.name in factorial]}
+
+
+def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
+    """Return the README's block: legend, main table, ablation, sweeps (those that ran)."""
+    parts = table_cells(cells)
+    blocks = [LEGEND, '', paired_table(parts['main'], rows, MAIN, cells)]
+    if parts['ablation']:
+        blocks += ['', 'Ablation: the default profile (config/paper.yaml) with each addition to '
+                   'the paper switched off alone, and the strict profile '
+                   '(config/paper_strict.yaml).', '',
+                   paired_table(parts['ablation'], rows, ABLATION, cells, ceiling=False)]
+    if parts['sweeps']:
+        blocks += ['', 'Sweeps: cooperative SAT-PHD around the random default, one factor '
+                   'changed.', '', paired_table(parts['sweeps'], rows, MAIN, cells)]
+    if parts['factorial']:
+        blocks += ['', 'Factorial (random setting): each policy against cooperative SAT-PHD at '
+                   'the same team, clutter and radio range.', '',
+                   paired_table(parts['factorial'], rows, MAIN, cells)]
+    return '\n'.join(blocks)
+
+
+def _mean_entry(values, scale: float, decimals: int) -> str:
+    finite = [v for v in values.values() if _finite(v)]
+    return _fmt(scale * float(np.mean(finite)), decimals) if finite else 'n/a'
+
+
+def _paired_entry(values, reference, scale: float, decimals: int) -> str:
+    mean = _mean_entry(values, scale, decimals)
+    difference = paired_difference(*paired_values(values, reference))
+    if not math.isfinite(difference.low):
+        return mean
+    mark = MARK if difference.significant else ''
+    low, high = (_fmt(scale * v, decimals, sign=True) for v in (difference.low, difference.high))
+    return (f'{mean} ({_fmt(scale * difference.estimate, decimals, sign=True)} '
+            f'[{low}, {high}]{mark})')
+
+
+def _ratio_entry(values, ceiling) -> str:
+    ratio = ratio_of_means(*paired_values(values, ceiling))
+    if not math.isfinite(ratio.estimate):
+        return 'n/a'
+    if math.isnan(ratio.low):
+        return f'{_fmt(100 * ratio.estimate, 0)} %'
+    return (f'{_fmt(100 * ratio.estimate, 0)} % [{_fmt(100 * ratio.low, 0)}, '
+            f'{_fmt(100 * ratio.high, 0)}]')
+
+
+def _fmt(value: float, decimals: int, sign: bool = False) -> str:
+    text = f'{value:+.{decimals}f}' if sign else f'{value:.{decimals}f}'
+    return text.replace('-', '−').replace('inf', '∞')
+
+
+def _mean_std(data: np.ndarray, decimals: int) -> str:
+    if not data.size:
+        return 'n/a'
+    return f'{np.mean(data):.{decimals}f} ± {np.std(data):.{decimals}f}'
+
+
+def _header(names: Sequence[str]) -> List[str]:
+    return [_line(names), '|' + ' --- |' * len(names)]
+
+
+def _line(entries: Sequence[str]) -> str:
+    return '| ' + ' | '.join(entries) + ' |'
+
+
+def _number(value) -> Optional[float]:
+    if value is None or value == '':
+        return None
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return value
+
+
+def _finite(value) -> bool:
+    return isinstance(value, float) and math.isfinite(value)

@@ -1,0 +1,90 @@
+import math
+
+import numpy as np
+import pytest
+
+from sat_agent.config import SatParams
+from sat_agent.sensor_model import in_sensing_square
+from sat_world_sim.metrics import compute_metrics
+from sat_world_sim.oracle_sweep import lane_ends, lap_positions, run_oracle_sweep
+from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions, sweep_speed
+from sat_world_sim.random_scenarios import random_scenario
+from sat_world_sim.world_model import World
+
+PARAMS = SatParams()
+SIDE = PARAMS.sensor.square_side
+
+
+def derived_period(lanes: int, length: float, speed: float) -> int:
+    """P = 2 (m ceil(l / v) + (m - 1) ceil(a / v)) of the module docstring."""
+    return 2 * (lanes * math.ceil(length / speed) + (lanes - 1) * math.ceil(SIDE / speed))
+
+
+def strip_cells(lanes: np.ndarray) -> np.ndarray:
+    """Centres of the 1 m lattice cells of a strip (its lanes' squares, side by side)."""
+    xs = np.arange(lanes.min() - SIDE / 2 + 0.5, lanes.max() + SIDE / 2, 1.0)
+    ys = np.arange(0.5, PARAMS.area.height, 1.0)
+    return np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+
+
+@pytest.mark.parametrize('agents', [1, 2, 4, 8])
+def test_the_oracle_visits_every_cell_of_its_strip_within_its_period(agents):
+    speed = sweep_speed(PARAMS)
+    low, high = lane_ends(PARAMS)
+    for lanes in strip_lanes(PARAMS, agents):
+        lap = lap_positions(sweep_cycle(lanes, lane_ends(PARAMS)), speed)
+        period = derived_period(len(lanes), high - low, speed)
+        assert len(lap) == period
+        # seen[t, c]: cell c in the square at step t of the lap. The path repeats the lap, so
+        # every window of P consecutive steps holds each step of the lap once: seeing every
+        # cell within any window is seeing it at some step of the lap.
+        seen = in_sensing_square(strip_cells(lanes)[None, :, :], lap[:, None, :], SIDE)
+        assert seen.any(axis=0).all(), lanes
+        # The period is tight: some cell is seen at one step of the lap only, so a window of
+        # P - 1 steps starting right after it misses it.
+        assert (seen.sum(axis=0) == 1).any()
+
+
+def test_strips_are_disjoint_and_their_lanes_tile_the_area():
+    for agents in (1, 2, 3, 4, 8, 10):
+        lanes = np.concatenate(strip_lanes(PARAMS, agents))
+        np.testing.assert_allclose(lanes, np.arange(SIDE / 2, PARAMS.area.width, SIDE))
+    with pytest.raises(ValueError, match='11 agents for 10 lanes'):
+        strip_lanes(PARAMS, 11)
+
+
+def test_sweep_positions_start_at_the_start_and_never_exceed_the_speed():
+    speed = sweep_speed(PARAMS)
+    cycle = sweep_cycle(strip_lanes(PARAMS, 4)[2], lane_ends(PARAMS))
+    path = sweep_positions((12.3, 81.7), cycle, speed, 400)
+    assert path.shape == (400, 2)
+    np.testing.assert_allclose(path[0], (12.3, 81.7))
+    steps = np.hypot(*np.diff(path, axis=0).T)
+    assert steps.max() <= speed + 1e-9
+    assert np.all((path >= 0.0) & (path <= 100.0))
+
+
+def test_the_oracle_detects_exactly_the_targets_that_enter_a_square_on_the_same_truth():
+    scenario = random_scenario(5, 4, 200)
+    run = run_oracle_sweep(scenario, PARAMS)
+    summary = compute_metrics(run.records, scenario.name, 5)['summary']
+    assert summary['detected_share'] == summary['entered_share'] > 0.0
+    assert summary['false_track_steps'] == 0 and summary['duplicate_tracking_steps'] == 0
+    assert {m for r in run.records for m in r.modes.values()} == {'SEARCH'}
+    # The oracle's truth is the World's for the seed, whoever flies.
+    world = World(scenario, PARAMS)
+    for record in run.records[:150]:
+        truth = world.truth()
+        np.testing.assert_array_equal(record.truth_ids, truth.ids)
+        np.testing.assert_allclose(record.truth_positions, truth.positions)
+        world.advance()
+    # 150 steps is the longest period with 4 agents: by then every cell has been seen.
+    assert run.records[-1].searched_fraction == 1.0
+
+
+def test_place_agents_refuses_positions_outside_the_area():
+    world = World(random_scenario(1, 2, 10), PARAMS)
+    with pytest.raises(ValueError, match='leave the area'):
+        world.place_agents({1: np.array([50.0, 50.0]), 2: np.array([101.0, 50.0])})
+    world.place_agents({1: np.array([50.0, 50.0]), 2: np.array([0.0, 100.0])})
+    np.testing.assert_allclose(world.pose(2), (0.0, 100.0))
