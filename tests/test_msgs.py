@@ -16,9 +16,10 @@ from sat_world_sim.bag_types import sat_typestore
 
 LATCHED = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
-EXPECTED_TYPES = {'AgentMode', 'AgentStatus', 'AgentTruth', 'ControlCommand', 'GridInfo',
-                  'GroundTruth', 'MeasurementSet', 'MultiTargetEstimate', 'RangeBearing',
-                  'RadioTraffic', 'SearchDensity', 'TargetEstimate', 'TargetTruth', 'WorldStep'}
+EXPECTED_TYPES = {'AgentMode', 'AgentStatus', 'AgentTruth', 'Auth', 'ControlCommand', 'GridInfo',
+                  'GroundTruth', 'MeasurementSet', 'MultiTargetEstimate', 'ObserverReady',
+                  'RangeBearing', 'RadioTraffic', 'SearchDensity', 'TargetEstimate',
+                  'TargetTruth', 'WorldStep'}
 
 
 def test_every_designed_type_is_built():

@@ -6,6 +6,7 @@ from rclpy.serialization import serialize_message
 
 from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.config import SatParams
+from sat_agent.message_auth import BLOCK_BYTES, Signer, WORLD_SENDER
 from sat_agent.ros.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
 from sat_agent.ros.radio_parsing import RadioParser
 
@@ -66,7 +67,18 @@ def test_a_shared_parser_parses_each_distinct_message_once(report_bytes):
     # The cache never holds more than max_entries: it is emptied when full.
     for kind in REPORT_KINDS:
         shared.parse(kind, data[kind], lattice)
-    shared.parse('mode', data['mode'][:-1] + b'\x01', lattice)
-    shared.parse('mode', data['mode'][:-1] + b'\x02', lattice)
+    body = len(data['mode']) - BLOCK_BYTES     # bytes before the relay's seal
+    shared.parse('mode', data['mode'][:body - 1] + b'\x01' + data['mode'][body:], lattice)
+    shared.parse('mode', data['mode'][:body - 1] + b'\x02' + data['mode'][body:], lattice)
     assert len(shared._parsed) <= 4
     assert shared.parse('search_density', data['search_density'], lattice) is not first
+
+
+def test_copies_that_differ_only_in_the_relays_seal_are_parsed_once(report_bytes):
+    """Composed mode: each receiver's copy has its own seal, the same content before it."""
+    lattice, _, data = report_bytes
+    shared = RadioParser(max_entries=4)
+    sealed = [Signer(bytes(32), WORLD_SENDER).seal(f'/agent_{i}/radio/in/mode', data['mode'], 3)
+              for i in (1, 2)]
+    assert sealed[0] != sealed[1]
+    assert shared.parse('mode', sealed[0], lattice) is shared.parse('mode', sealed[1], lattice)

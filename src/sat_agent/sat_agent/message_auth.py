@@ -278,18 +278,24 @@ class Signer:
 class MessageVerifier:
     """A receiver's policy: refuse unsigned, badly signed, replayed and out-of-window messages.
 
-    ``senders``: the ids allowed to sign besides WORLD_SENDER (the scenario's roster). Replays
+    ``senders``: the ids allowed to sign besides WORLD_SENDER (the scenario's roster; None: any,
+    for a receiver that does not know the roster and relies on the relay's check). Replays
     are judged per (signer, channel): a counter not above the last one accepted there is
-    refused. Every refusal raises AuthError and is counted in ``refused`` per reason; accepted
-    messages are counted in ``accepted`` per channel. ``key`` None: authentication off, every
+    refused (``replays=False``: not judged, for a channel several processes sign as one
+    sender, whose counters are not one sequence). Every refusal raises AuthError and is
+    counted in ``refused`` per reason; accepted messages are counted in ``accepted`` per
+    channel. ``key`` None: authentication off, every
     message is accepted (counted as ``unauthenticated``) and verify returns None. world_sim,
     which is the world, sets ``step`` itself at each step.
     """
 
-    def __init__(self, key: Optional[bytes], senders: Collection[int], window: StepWindow):
+    def __init__(self, key: Optional[bytes], senders: Optional[Collection[int]],
+                 window: StepWindow, replays: bool = True):
         self.key = key
-        self.senders = frozenset(int(s) for s in senders) | {WORLD_SENDER}
+        self.senders = None if senders is None else \
+            frozenset(int(s) for s in senders) | {WORLD_SENDER}
         self.window = window
+        self.replays = replays
         self.step: Optional[int] = None     # the step learned from the world's messages
         self.refused: Counter = Counter()   # reason -> messages refused
         self.accepted: Counter = Counter()  # channel -> messages accepted
@@ -342,6 +348,21 @@ class MessageVerifier:
             raise AuthError('mismatch', f'signed by {signed.sender} for step {signed.step}, '
                                         f'the message says {sender} and step {step}')
 
+    def check_window(self, channel: str, sender: int, step: int):
+        """Hold an unsigned message's own sender and step to the step window, or raise AuthError.
+
+        For receivers that keep what they accept (the observers): with authentication off the
+        message's fields are all there is, and a step far ahead must not be kept forever. A
+        world message (sender WORLD_SENDER) teaches the step as a signed one would.
+        """
+        signed = Signed(int(sender), int(step), 0)
+        try:
+            self._check_step(channel, signed)
+        except AuthError as error:
+            self.refused[error.reason] += 1
+            raise
+        self._learn_step(signed)
+
     def _verify(self, channel: str, data, relayed: bool, sender: Optional[int],
                 max_bytes: Optional[int]) -> Optional[Signed]:
         _check_size(channel, data, max_bytes)
@@ -369,7 +390,7 @@ class MessageVerifier:
         what = 'seal' if seal else 'signature'
         if not any(mac):
             raise AuthError('unsigned', f'{channel_of(sender)}: no {what}')
-        if sender not in self.senders:
+        if self.senders is not None and sender not in self.senders:
             raise AuthError('unknown_sender',
                             f'{channel_of(sender)}: signed by {sender}, not on the roster')
         if expected is not None and sender != expected:
@@ -389,15 +410,18 @@ class MessageVerifier:
             return None
         key = (signed.sender, channel)
         last = self._last.get(key)
-        if last is not None and signed.counter <= last:
+        if self.replays and last is not None and signed.counter <= last:
             raise AuthError('replayed', f'{channel}: counter {signed.counter} of {signed.sender} '
                                         f'not above {last}')
         self._check_step(channel, signed)
         self._last[key] = signed.counter
-        if signed.sender == WORLD_SENDER:
-            self.step = signed.step if self.step is None else max(self.step, signed.step)
+        self._learn_step(signed)
         self.accepted[channel] += 1
         return signed
+
+    def _learn_step(self, signed: Signed):
+        if signed.sender == WORLD_SENDER:
+            self.step = signed.step if self.step is None else max(self.step, signed.step)
 
     def _check_step(self, channel: str, signed: Signed):
         world = signed.sender == WORLD_SENDER

@@ -23,3 +23,12 @@ ROBOT_DETECTIONS = ('robot/detections', 'sensor_msgs/msg/PointCloud2')
 # world_sim's sim time and its truth as markers.
 CLOCK = ('/clock', 'rosgraph_msgs/msg/Clock')
 TRUTH_MARKERS = ('/world/truth_markers', 'visualization_msgs/msg/MarkerArray')
+
+
+def radio_topic(agent_id: int, direction: str, kind: str) -> str:
+    """Return the absolute name of agent i's radio topic: /agent_<i>/radio/{out,in}/<kind>.
+
+    Signatures bind a message to this name (sat_agent.message_auth): a relayed report's
+    sender block verifies on the radio/out topic it was published on.
+    """
+    return f'/agent_{agent_id}/radio/{direction}/{kind}'

@@ -15,6 +15,14 @@ One source of truth for what a run is: ``process_list`` turns the options into t
 (``launch/swarm.launch.py``, whose launch arguments are these options) start exactly those;
 ``--print-ros2-run`` prints them as ``ros2 run`` lines.
 
+Authentication (sat_agent.message_auth): every run gets a fresh swarm key, written (mode 0600)
+into a private temporary directory (mode 0700, outside the run directory, so neither the
+recorded run nor a copy of it carries the key) and deleted when the run ends; every process
+gets its path as the parameter ``auth_key_file``. ``--key-file`` uses a key file of your own
+instead (to run agents on several machines, each with a copy of it); it is checked before
+anything starts. ``--no-auth`` runs without authentication, with a loud warning in every
+process.
+
 The run ends when the observers (metrics, recorder, logger) have exited, after the world's last
 step; then every process still running is stopped (SIGINT, then SIGKILL after a grace period).
 The agents exit by themselves when the world says the run is finished. Ctrl-C stops everything
@@ -31,9 +39,11 @@ import os
 from pathlib import Path
 import random
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from typing import Dict, List, Mapping, Optional, Sequence, Tuple
@@ -41,6 +51,7 @@ from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
 
 from sat_agent.config import load_params_file, ParameterError
+from sat_agent.message_auth import AUTH_OFF_WARNING, create_key_file, KeyFileError, load_key
 
 from sat_world_sim.scenario import load_scenario, ScenarioError
 
@@ -102,7 +113,8 @@ class Child:
         self.process = subprocess.Popen(self.spec.command(), env=env, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, bufsize=1,
                                         start_new_session=True)
-        log = open(log_dir / f'{self.name}.log', 'a', encoding='utf-8')
+        # Line-buffered: the log shows each line as it comes, not at the end of the run.
+        log = open(log_dir / f'{self.name}.log', 'a', encoding='utf-8', buffering=1)
         pump = threading.Thread(target=_prefix_lines,
                                 args=(self.name, self.process.stdout, log, echo), daemon=True)
         pump.start()
@@ -195,15 +207,16 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     Every node runs on world_sim's sim time and gets the run's seed explicitly, so a
     ``ros2 run`` of these lines is the same run as the bring-up's.
     """
-    params = ('--params-file', str(options.params), '-p', 'use_sim_time:=true')
+    key = ('-p', f'auth_key_file:={options.key_file}') if options.key_file else ()
+    params = ('--params-file', str(options.params), '-p', 'use_sim_time:=true', *key)
     views = ('-p', f'view_rate:={options.view_rate}') if options.view_rate is not None else ()
-    ids = '[' + ','.join(str(i) for i in agent_ids) + ']'
-    run_dir = ('-p', f'run_dir:={options.run_dir}', '-p', f'agent_ids:={ids}')
+    roster = ('-p', 'agent_ids:=[' + ','.join(str(i) for i in agent_ids) + ']')
+    run_dir = ('-p', f'run_dir:={options.run_dir}', *roster)
     observers = [Process('metrics', 'sat_world_sim', 'metrics', ros_arguments=(
         *params, *run_dir), observer=True)]
     if options.record:
         observers.append(Process('recorder', 'sat_world_sim', 'recorder', ros_arguments=(
-            '-p', 'use_sim_time:=true', *run_dir), observer=True))
+            *params, *run_dir), observer=True))
     if options.view != 'none':
         observers.append(Process('logger', 'sat_world_sim', 'logger', ros_arguments=(
             *params, *run_dir, '-p', f'sink:={options.view}'), observer=True))
@@ -220,12 +233,12 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     if options.composed:
         processes.append(Process('agents', 'sat_agent', 'agents_composed',
                                  arguments=('--ids', *map(str, agent_ids)),
-                                 ros_arguments=(*params, *seed, *views),
+                                 ros_arguments=(*params, *roster, *seed, *views),
                                  respawn=options.respawn))
     else:
         processes += [Process(f'agent_{i}', 'sat_agent', 'agent', ros_arguments=(
-            '-r', f'__ns:=/agent_{i}', *params, '-p', f'agent_id:={i}', *seed, *views),
-            respawn=options.respawn) for i in agent_ids]
+            '-r', f'__ns:=/agent_{i}', *params, '-p', f'agent_id:={i}', *roster, *seed,
+            *views), respawn=options.respawn) for i in agent_ids]
     return processes
 
 
@@ -305,6 +318,12 @@ def build_parser() -> argparse.ArgumentParser:
                              'else the installed config/fastdds.xml)')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID (default: a private one for this run)')
+    parser.add_argument('--key-file', default=None,
+                        help='swarm key file (>= 32 random bytes, mode 0600) to sign with, e.g. '
+                             'shared by the machines of one swarm (default: a new key per run)')
+    parser.add_argument('--no-auth', action='store_true',
+                        help='no message authentication: any process on the ROS domain can '
+                             'forge commands, scans and reports (default: on)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')
     parser.add_argument('--quiet', action='store_true',
                         help="only write the processes' output to <run-dir>/logs/, not stderr")
@@ -363,8 +382,9 @@ def options_from_launch(values: Mapping[str, str]) -> argparse.Namespace:
 
 def absolute(options) -> argparse.Namespace:
     """Return a copy of the options with absolute paths (a child's working directory may vary)."""
-    paths = {name: str(Path(getattr(options, name)).resolve())
-             for name in ('scenario', 'params', 'run_dir', 'fastdds_profile')}
+    names = ('scenario', 'params', 'run_dir', 'fastdds_profile') + \
+        (('key_file',) if options.key_file else ())
+    paths = {name: str(Path(getattr(options, name)).resolve()) for name in names}
     return argparse.Namespace(**{**vars(options), **paths})
 
 
@@ -405,23 +425,56 @@ def load_run(options) -> List[Process]:
     return process_list(options, scenario.agent_ids, scenario.seed)
 
 
+def check_auth(options):
+    """Check the authentication options before anything starts (KeyFileError names the path)."""
+    if options.no_auth and options.key_file:
+        raise KeyFileError(f'--no-auth and --key-file {options.key_file}: choose one')
+    if options.key_file:
+        load_key(options.key_file)
+
+
+def run_key(options) -> Optional[Path]:
+    """Create this run's key unless one was given or auth is off; return its private directory.
+
+    mkdtemp makes the directory mode 0700 for this user only, outside the run directory (the
+    recorded run must not carry the key); the caller removes it when the run ends.
+    """
+    if options.key_file or options.no_auth:
+        return None
+    directory = Path(tempfile.mkdtemp(prefix='sat-swarm-key-'))
+    options.key_file = str(create_key_file(directory / 'swarm.key'))
+    return directory
+
+
 def main(argv=None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     options = args if args.print_ros2_run else absolute(args)
     try:
-        processes = load_run(options)
-    except (ParameterError, ScenarioError, OSError) as error:
+        check_auth(options)
+    except KeyFileError as error:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
-    if args.print_ros2_run:
-        env = run_env(options.fastdds_profile, options.domain_id)
-        print('\n'.join(ros2_run_lines(processes, env)))
-        return 0
-    env = ros_env(options.domain_id, options.fastdds_profile)
-    agents = sum(p.executable == 'agent' for p in processes) or 'composed'
-    print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {agents} agents, "
-          f'{options.clock}, run dir {args.run_dir}', file=sys.stderr)
-    code = run(processes, env, Path(options.run_dir), options.timeout, not options.quiet)
+    key_dir = None if args.print_ros2_run else run_key(options)
+    try:
+        try:
+            processes = load_run(options)
+        except (ParameterError, ScenarioError, OSError) as error:
+            print(f'swarm: {error}', file=sys.stderr)
+            return 2
+        if args.print_ros2_run:
+            env = run_env(options.fastdds_profile, options.domain_id)
+            print('\n'.join(ros2_run_lines(processes, env)))
+            return 0
+        if options.no_auth:
+            print(f'[swarm] WARNING: {AUTH_OFF_WARNING}', file=sys.stderr)
+        env = ros_env(options.domain_id, options.fastdds_profile)
+        agents = sum(p.executable == 'agent' for p in processes) or 'composed'
+        print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {agents} agents, "
+              f'{options.clock}, run dir {args.run_dir}', file=sys.stderr)
+        code = run(processes, env, Path(options.run_dir), options.timeout, not options.quiet)
+    finally:
+        if key_dir is not None:
+            shutil.rmtree(key_dir, ignore_errors=True)
     print(Path(args.run_dir))
     return code
 

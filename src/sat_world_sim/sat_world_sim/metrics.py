@@ -107,11 +107,13 @@ def swarm_estimate(estimates: Mapping[int, np.ndarray], merge_distance: float) -
 
 
 def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
-                    config: MetricsConfig = MetricsConfig(), late_commands: int = 0) -> dict:
+                    config: MetricsConfig = MetricsConfig(), late_commands: int = 0,
+                    dropped: Optional[Mapping[str, int]] = None) -> dict:
     """Return the metrics.json dict (JSON-serialisable, deterministic) of a run's records.
 
     late_commands: commands that missed their step (real-time clock; 0 in lock-step and in the
-    in-process swarm, where every agent answers every step).
+    in-process swarm, where every agent answers every step). dropped: messages the metrics
+    node refused, per reason (unsigned, too_large, out_of_window, ...); empty in a clean run.
     """
     records = sorted(records, key=lambda r: r.step)
     steps = [_step_metrics(r, config) for r in records]
@@ -128,6 +130,7 @@ def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
         'overlap_events': [dict(e) for r in records for e in r.overlap_events],
         'radio': radio,
         'late_commands': int(late_commands),
+        'dropped': {str(k): int(n) for k, n in sorted((dropped or {}).items())},
         'summary': _summary(steps, targets, radio),
     }
 

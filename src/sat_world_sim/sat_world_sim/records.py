@@ -189,12 +189,13 @@ class RunCollector(StepMessages):
         return [pickle.loads(record) for record in self.settled] + \
             [self.step_record(step) for step in sorted(self.truths)]
 
-    def metrics(self, records: Sequence[StepRecord]) -> dict:
-        """Return the metrics.json dict of the run."""
+    def metrics(self, records: Sequence[StepRecord], dropped=None) -> dict:
+        """Return the metrics.json dict of the run (dropped: compute_metrics)."""
         final = self.final
         return compute_metrics(records, final.scenario if final else '',
                                int(final.seed) if final else 0,
-                               late_commands=int(final.late_commands) if final else 0)
+                               late_commands=int(final.late_commands) if final else 0,
+                               dropped=dropped)
 
     def fused_density(self) -> Optional[np.ndarray]:
         """Elementwise max of the last search density each agent sent."""
@@ -202,12 +203,12 @@ class RunCollector(StepMessages):
                   if (v := density_values(m)) is not None]
         return np.maximum.reduce(values) if values else None
 
-    def write(self, run_dir, area) -> dict:
+    def write(self, run_dir, area, dropped=None) -> dict:
         """Write <run_dir>/metrics.json and <run_dir>/plots/*.png; return the metrics."""
         run_dir = Path(run_dir)
         run_dir.mkdir(parents=True, exist_ok=True)
         records = self.records()
-        metrics = self.metrics(records)
+        metrics = self.metrics(records, dropped)
         write_metrics(metrics, run_dir / 'metrics.json')
         write_plots(metrics, records, run_dir / 'plots', area=area,
                     final_density=self.fused_density())

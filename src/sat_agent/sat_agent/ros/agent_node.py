@@ -7,13 +7,15 @@ Run one per agent in its own namespace::
 
 Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
 
-- ``measurements`` (sub, MeasurementSet, STEP) with ``input_source:=world_sim`` (default), or
+- ``measurements`` (sub, MeasurementSet, STEP, signed by the world) with
+  ``input_source:=world_sim`` (default), or
   ``robot/pose`` (PoseStamped) and ``robot/detections`` (PointCloud2) with
   ``input_source:=robot`` (sub, ROBOT: sat_agent.ros.robot_input says what they hold);
-- ``/world/step`` (sub, WorldStep, WORLD): with world_sim input, the agent exits (code 0)
-  when the world says the run is ``finished``;
-- ``radio/in/{search_density,estimate,mode}`` (sub, RADIO, raw bytes parsed by
-  sat_agent.ros.radio_parsing, once per process in composed mode);
+- ``/world/step`` (sub, WorldStep, WORLD, signed by the world): with world_sim input, the
+  agent exits (code 0) when the world says the run is ``finished``;
+- ``radio/in/{search_density,estimate,mode}`` (sub, RADIO, raw bytes sealed by world_sim's
+  relay for this agent, parsed by sat_agent.ros.radio_parsing, once per process in composed
+  mode);
 - ``cmd`` (pub, ControlCommand, STEP) and ``robot/goal`` (pub, PoseStamped, STEP): the
   position the chosen action leads to, for world_sim or for a real drone's position
   controller; ``radio/out/*`` (pub, RADIO);
@@ -22,6 +24,16 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
   seconds of sim time (the plan when it changed).
 
 Every header carries the step's sim time and a frame (sat_agent.stamps).
+
+Authentication (sat_agent.message_auth, sat_agent.ros.signed_io): with ``auth_key_file`` set,
+cmd, status and radio/out are signed as agent ``agent_id``; scans, /world/step and radio/in
+are taken raw and refused (counted) before deserialization when larger than their limit
+(message_limits, also without a key), unsigned, badly signed, replayed, not sealed for this
+agent by the relay, from a sender off ``agent_ids`` (the roster; unset: the relay's check),
+or outside the step window: the world's within MAX_REPORT_LAG behind to MAX_STEP_JUMP ahead
+of the step the agent learned from signed world messages, its peers' within MAX_REPORT_LAG
+behind to one ahead. A new or respawned agent learns the step only from a signed world
+message, so a forged scan of step 2^32-1 cannot move it.
 
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
@@ -49,8 +61,10 @@ from sensor_msgs.msg import PointCloud2
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
+from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
 from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
+from sat_agent.ros.message_limits import MessageLimits, STATUS_PARTICLES
 from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage,
                                            measurements_from_msg, message_class, point,
                                            RADIO_TYPES, report_from_parts, report_to_msgs)
@@ -59,14 +73,13 @@ from sat_agent.ros.qos import RADIO, ROBOT, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotPose
 from sat_agent.ros.ros_params import AGENT_PARAMS, declare_node_params, declare_sat_params
+from sat_agent.ros.signed_io import declare_auth, SignedPublisher, VerifiedInput
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_at, views_due
-from sat_agent.topic_names import (AGENT_VIEWS, ROBOT_DETECTIONS, ROBOT_GOAL, ROBOT_POSE,
-                                   VIEW_PREFIX)
+from sat_agent.topic_names import (AGENT_VIEWS, radio_topic, ROBOT_DETECTIONS, ROBOT_GOAL,
+                                   ROBOT_POSE, VIEW_PREFIX)
 from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet, WorldStep
 
-# Particles shown to the logger per step: enough to see the cloud, small on the wire.
-STATUS_PARTICLES = 300
 # A scan further ahead than this is garbage, not a world that ran on without us.
 MAX_STEP_JUMP = 1000
 # Reports older than this many steps are stale; younger late ones (radio latency) still add
@@ -95,6 +108,13 @@ class AgentNode(Node):
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.last_step = 0
         self.guard = InputGuard(self, f'agent_{self.agent_id}')
+        key = declare_auth(self)
+        roster = self.declare_parameter('agent_ids', Parameter.Type.INTEGER_ARRAY).value
+        self.inputs = VerifiedInput(self, self.guard, key, roster,
+                                    StepWindow(behind=MAX_REPORT_LAG, ahead=1,
+                                               world_ahead=MAX_STEP_JUMP))
+        self.limits = MessageLimits.compute(self.params, len(roster or ()))
+        signer = Signer(key, self.agent_id)
         self._pending = None          # (step, (pose, measurements), deliveries, arrival time)
         self._radio = {}              # (sender, step) -> {kind: validated content}
         self._received_since_step = 0
@@ -102,10 +122,11 @@ class AgentNode(Node):
         self._last_view_step = None
         self._last_plan = None
 
-        self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP)
+        self.cmd_pub = SignedPublisher(self, ControlCommand, 'cmd', STEP, signer)
         self.goal_pub = self.create_publisher(PoseStamped, ROBOT_GOAL[0], STEP)
-        self.status_pub = self.create_publisher(AgentStatus, 'status', STEP)
-        self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO)
+        self.status_pub = SignedPublisher(self, AgentStatus, 'status', STEP, signer)
+        self.radio_pubs = {kind: SignedPublisher(self, cls, f'radio/out/{kind}', RADIO, signer,
+                                                 relayed=True)
                            for kind, cls in RADIO_TYPES.items()}
         self.view_pubs = {name: self.create_publisher(message_class(msgtype),
                                                       VIEW_PREFIX + name, WORLD)
@@ -115,13 +136,16 @@ class AgentNode(Node):
             self.create_subscription(PointCloud2, ROBOT_DETECTIONS[0], self.on_detections,
                                      ROBOT)
         else:
-            self.create_subscription(MeasurementSet, 'measurements', self.on_measurements,
-                                     STEP)
-            self.create_subscription(WorldStep, '/world/step', self.on_world_step, WORLD)
-        for kind, cls in RADIO_TYPES.items():
-            self.create_subscription(cls, f'radio/in/{kind}',
-                                     lambda data, kind=kind: self.on_radio(kind, data), RADIO,
-                                     raw=True)
+            self.inputs.subscribe(MeasurementSet, 'measurements', self.on_measurements, STEP,
+                                  self.limits.scan, sender=WORLD_SENDER, names_sender=False)
+            self.inputs.subscribe(WorldStep, '/world/step', self.on_world_step, WORLD,
+                                  self.limits.step, sender=WORLD_SENDER)
+        for kind in RADIO_TYPES:
+            channel = self.resolve_topic_name(f'radio/in/{kind}')
+            self.create_subscription(
+                RADIO_TYPES[kind], channel,
+                lambda data, kind=kind, channel=channel: self.on_radio(kind, channel, data),
+                RADIO, raw=True)
         steady_timer(self, 0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
 
@@ -186,10 +210,16 @@ class AgentNode(Node):
         self._pending = (step, scan, deliveries, time.monotonic())
         self._try_step()
 
-    def on_radio(self, kind: str, data: bytes):
+    def on_radio(self, kind: str, channel: str, data: bytes):
+        signed = self.inputs.check(channel, data, self.limits.radio(kind),
+                                   origin=lambda sender: radio_topic(sender, 'out', kind))
+        if signed is False:
+            return
         msg, part = self.radio_parser.parse(kind, data, self.lattice)
         if msg is None:
             self.guard.drop(part.reason, f'{kind}: {part.detail}')
+            return
+        if not self.inputs.confirm(channel, signed, msg):
             return
         if msg.agent_id == self.agent_id:
             self.guard.drop('own_report', f'{kind} from this agent came back')
@@ -256,14 +286,14 @@ class AgentNode(Node):
         self.last_step = step
         lattice = self.core.filter.search.lattice
         for kind, out in zip(REPORT_KINDS, report_to_msgs(output.report, lattice, self.dt)):
-            self.radio_pubs[kind].publish(out)
+            self.radio_pubs[kind].publish(out, step)
         stamp = header(step, self.dt)
         self.status_pub.publish(self._status(stamp, step, pose, output,
-                                             time.perf_counter() - started))
+                                             time.perf_counter() - started), step)
         target = candidate_poses(pose, self.params.actions)[output.action]
         self.cmd_pub.publish(ControlCommand(header=stamp, agent_id=self.agent_id, step=step,
                                             action_index=output.action,
-                                            target_position=point(target)))
+                                            target_position=point(target)), step)
         self.goal_pub.publish(views.pose_stamped(target, stamp))
         if views_due(step, self._last_view_step, self.dt, self.node_params.view_rate):
             self._last_view_step = step

@@ -31,6 +31,8 @@ class InputGuard:
         self._reported = 0
         self._last_warning = {}      # reason -> time.monotonic() of its last warning
         self._warned = Counter()     # reason -> drops counted at its last warning
+        # 'on' / 'off' once the node verifies signed input (signed_io.VerifiedInput).
+        self.auth = None
         self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         steady_timer(node, period, self.publish)
 
@@ -64,9 +66,15 @@ class InputGuard:
                   for k, n in sorted(self.accepted.items())]
         values += [KeyValue(key=f'dropped.{k}', value=str(n))
                    for k, n in sorted(self.dropped.items())]
+        message = f'{total} message(s) dropped'
+        if self.auth is not None:
+            values.append(KeyValue(key='authenticated', value=str(int(self.auth == 'on'))))
+            if self.auth == 'off':
+                # Unauthenticated input is a standing warning, not a passing one.
+                level, message = DiagnosticStatus.WARN, f'auth off; {message}'
         name = f'{self._node.get_fully_qualified_name()}: input'
         return DiagnosticStatus(level=level, name=name, hardware_id=self._hardware_id,
-                                message=f'{total} message(s) dropped', values=values)
+                                message=message, values=values)
 
     def publish(self):
         """Publish the counters on /diagnostics."""

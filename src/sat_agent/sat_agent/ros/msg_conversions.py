@@ -148,13 +148,18 @@ def density_to_msg(agent_id: int, step: int, encoded: bytes, lattice: Lattice,
                          grid=grid_info(lattice), values_zlib=array('B', encoded))
 
 
+def check_grid(grid: GridInfo, lattice: Lattice):
+    """Raise InvalidMessage unless a density's grid is the lattice's (checked before decoding)."""
+    expected = grid_info(lattice)
+    if (grid.width, grid.height) != (expected.width, expected.height) or \
+            (grid.origin_x, grid.origin_y, grid.resolution) != \
+            (expected.origin_x, expected.origin_y, expected.resolution):
+        raise InvalidMessage('grid_mismatch', f'grid {grid} differs from {expected}')
+
+
 def density_from_msg(msg: SearchDensity, lattice: Lattice) -> np.ndarray:
     """Return the (ny, nx) float32 values of a validated SearchDensity on this agent's lattice."""
-    expected = grid_info(lattice)
-    if (msg.grid.width, msg.grid.height) != (expected.width, expected.height) or \
-            (msg.grid.origin_x, msg.grid.origin_y, msg.grid.resolution) != \
-            (expected.origin_x, expected.origin_y, expected.resolution):
-        raise InvalidMessage('grid_mismatch', f'grid {msg.grid} differs from {expected}')
+    check_grid(msg.grid, lattice)
     try:
         values = decode_density(msg.values_zlib, (lattice.ny, lattice.nx))
     except DensityDecodeError as error:

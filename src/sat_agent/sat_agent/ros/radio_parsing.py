@@ -7,13 +7,16 @@ agents share one process, which then receives the same bytes once per receiver: 
 every message with 64 agents spread over the area. A RadioParser shared by those agents
 deserializes and validates each distinct message once (for a density that includes the zlib
 decode); the other copies cost a dict lookup. The parsed contents are read-only (a decoded
-density is a view of immutable bytes), so agents can share them.
+density is a view of immutable bytes), so agents can share them. Each copy ends with the
+relay's seal for its receiver (sat_agent.message_auth), checked by the receiver before it
+parses: the cache is keyed by what comes before the seal, which is the same in every copy.
 """
 
 from typing import Tuple
 
 from rclpy.serialization import deserialize_message
 
+from sat_agent.message_auth import BLOCK_BYTES
 from sat_agent.ros.msg_conversions import InvalidMessage, RADIO_TYPES, report_part_from_msg
 from sat_agent.search_density import Lattice
 
@@ -32,10 +35,10 @@ class RadioParser:
 
     def parse(self, kind: str, data: bytes, lattice: Lattice) -> Tuple[object, object]:
         """Parse one radio message (see the class docstring); never raises InvalidMessage."""
-        key = (kind, lattice, bytes(data))
+        key = (kind, lattice, bytes(data[:-BLOCK_BYTES]))
         parsed = self._parsed.get(key)
         if parsed is None:
-            parsed = self._parse(kind, key[2], lattice)
+            parsed = self._parse(kind, bytes(data), lattice)
             if self.max_entries:
                 if len(self._parsed) >= self.max_entries:
                     self._parsed.clear()

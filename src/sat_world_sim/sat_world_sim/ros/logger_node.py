@@ -75,7 +75,7 @@ class LoggerNode(Node):
         self.buffer = rerun_view.StepBuffer(self.view)
         self._finished_at = None
         # world_sim starts step 1 once every subscription here has matched its publisher.
-        self.ready = watch_run(self, self.agent_ids, self.buffer.add)
+        self.watch = watch_run(self, self.params, self.agent_ids, self.buffer.add)
         steady_timer(self, 0.1, self._tick)
         self.get_logger().info(f'logging to {self.rrd_path} (sink {sink})')
 

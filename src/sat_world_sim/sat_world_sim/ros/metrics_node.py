@@ -3,7 +3,9 @@
 Subscribes to ``/world/step``, ``/world/truth``, ``/world/radio`` and every agent's ``status``
 and ``radio/out/search_density``, hands every message to records.RunCollector (the same code the
 offline replay of a bag uses) and, once the world's ``finished`` step and the last step's data
-are in, writes ``<run_dir>/metrics.json`` and ``<run_dir>/plots/*.png`` and exits. Its memory
+are in, writes ``<run_dir>/metrics.json`` (with ``dropped``: what it refused, per reason) and
+``<run_dir>/plots/*.png`` and exits. Its input is verified and bounded (observer.watch_run):
+a forged ``finished`` or truth is refused before it is deserialized. Its memory
 stays flat over long runs: the collector keeps the messages of the last records.SETTLE_STEPS
 steps, a compact record of each earlier step and each agent's last search density.
 """
@@ -31,7 +33,7 @@ class MetricsNode(Node):
         self.run_dir, agent_ids = declare_run(self, 'where metrics.json and plots/ go')
         self.collector = RunCollector(agent_ids)
         self._finished_at = None
-        self.ready = watch_run(self, agent_ids, self.collector.add)
+        self.watch = watch_run(self, self.params, agent_ids, self.collector.add)
         steady_timer(self, 0.1, self._tick)
 
     def _tick(self):
@@ -43,7 +45,7 @@ class MetricsNode(Node):
                 time.monotonic() - self._finished_at < FINAL_WAIT_S:
             return
         area = (self.params.area.width, self.params.area.height)
-        metrics = self.collector.write(self.run_dir, area)
+        metrics = self.collector.write(self.run_dir, area, self.watch.dropped)
         self.get_logger().info(
             f"wrote {self.run_dir / 'metrics.json'} ({len(metrics['steps'])} steps)")
         finish_run(self, 0)

@@ -1,38 +1,68 @@
-"""How an observer node (metrics, recorder, logger) tells world_sim it is ready to watch.
+"""What the observer nodes (metrics, recorder, logger) share: readiness, and guarded input.
 
-world_sim must not start step 1 before every observer receives every topic it needs, or the run's
-first messages are lost to it (DDS drops what a writer sends before a reader matched). So each
-observer checks that each of its subscriptions has matched a publisher, then announces its name
-once on the latched ``/world/observers`` topic; world_sim starts when it has heard ``observers``
-distinct names (and every agent is matched).
+**Readiness.** world_sim must not start step 1 before every observer receives every topic it
+needs, or the run's first messages are lost to it (DDS drops what a writer sends before a
+reader matched). So each observer checks that each of its subscriptions has matched a
+publisher, then announces its name once, signed, on the latched ``/world/observers`` topic
+(sat_msgs/ObserverReady); world_sim starts when it has heard ``observers`` distinct names (and
+every agent is matched). Unsigned, a forged announcement could start the world early.
+
+**Input.** Observers take every signed topic raw through signed_io.VerifiedInput, as the
+agents do: the size limit of message_limits before anything else, the signature (or, with
+authentication off, the step window on the message's own step), deserialization in a try, a
+search density's grid checked against the lattice before it is decoded. A message refused on
+the way is counted per reason on /diagnostics (and in metrics.json's ``dropped``), so no
+message can crash an observer, hang it (a truth of step 2^32-1) or make it keep more than the
+window's worth of steps (far-future statuses).
 """
 
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Optional
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from std_msgs.msg import String
 
+from sat_agent.agent_core import REPORT_KINDS
+from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
+from sat_agent.ros.input_guard import InputGuard
+from sat_agent.ros.message_limits import MessageLimits
+from sat_agent.ros.msg_conversions import check_grid, InvalidMessage
 from sat_agent.ros.node_runner import steady_timer
-from sat_agent.ros.qos import RADIO, STEP, WORLD
-from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
+from sat_agent.ros.qos import DEPTH, RADIO, STEP, WORLD
+from sat_agent.ros.signed_io import declare_auth, SignedPublisher, VerifiedInput
+from sat_agent.search_density import Lattice
+from sat_agent.topic_names import radio_topic
+from sat_msgs.msg import (AgentStatus, GroundTruth, ObserverReady, RadioTraffic, SearchDensity,
+                          WorldStep)
+
+from sat_world_sim.topics import agent_of
 
 TOPIC = '/world/observers'
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                  durability=DurabilityPolicy.TRANSIENT_LOCAL)
+# Observers may fall up to a writer's history (qos.DEPTH steps) behind the world; a peer's
+# message is never more than a step ahead of the world's, and the world's come one step at a
+# time on each topic.
+WINDOW = StepWindow(behind=DEPTH, ahead=1, world_ahead=1)
+_WORLD_TOPICS = {'/world/step': 'step', '/world/truth': 'truth', '/world/radio': 'traffic'}
 
 
 class ReadyAnnouncer:
-    """Announce node's name on TOPIC once all the given subscriptions have a publisher."""
+    """Announce node's name on TOPIC once all the given subscriptions have a publisher.
 
-    def __init__(self, node, subscriptions, period: float = 0.1):
+    key: the run's swarm key (None: authentication off); observers sign as the world does.
+    """
+
+    def __init__(self, node, subscriptions, key: Optional[bytes] = None, period: float = 0.1):
         self._node = node
         self._subscriptions = list(subscriptions)
-        self._publisher = node.create_publisher(String, TOPIC, QOS)
+        self._publisher = SignedPublisher(node, ObserverReady, TOPIC, QOS,
+                                          Signer(key, WORLD_SENDER))
         self._timer = steady_timer(node, period, self._check)
 
     def _check(self):
         if all(s.get_publisher_count() > 0 for s in self._subscriptions):
-            self._publisher.publish(String(data=self._node.get_fully_qualified_name()))
+            self._publisher.publish(ObserverReady(name=self._node.get_fully_qualified_name()), 0)
             self._node.destroy_timer(self._timer)
 
 
@@ -48,18 +78,76 @@ def declare_run(node, what: str):
     return Path(run_dir), [int(i) for i in node.declare_parameter('agent_ids', [1, 2]).value]
 
 
-def watch_run(node, agent_ids, add) -> ReadyAnnouncer:
+def signature_of(topic: str, limits: MessageLimits) -> Optional[dict]:
+    """How a topic of the graph is signed: VerifiedInput.subscribe's keywords, None if it is not.
+
+    The world signs its topics and every scan; agent i its cmd, status and radio/out; the
+    radio's inboxes carry the sender's block and the relay's seal. Standard-typed topics (the
+    clock, views, markers, robot goal) are not signed.
+    """
+    if topic in _WORLD_TOPICS:
+        return {'max_bytes': getattr(limits, _WORLD_TOPICS[topic]), 'sender': WORLD_SENDER}
+    owner = agent_of(topic)
+    if owner is None:
+        return None
+    agent, rest = owner
+    own = {'measurements': {'max_bytes': limits.scan, 'sender': WORLD_SENDER,
+                            'names_sender': False},
+           'cmd': {'max_bytes': limits.command, 'sender': agent},
+           'status': {'max_bytes': limits.status, 'sender': agent}}
+    for kind in REPORT_KINDS:
+        own[f'radio/out/{kind}'] = {'max_bytes': limits.radio(kind), 'sender': agent,
+                                    'relayed': True}
+        own[f'radio/in/{kind}'] = {'max_bytes': limits.radio(kind),
+                                   'origin': lambda s, kind=kind: radio_topic(s, 'out', kind)}
+    return own.get(rest)
+
+
+def observer_input(node, params, agent_ids):
+    """Return (VerifiedInput, MessageLimits, key) of an observer node watching these agents."""
+    key = declare_auth(node)
+    guard = InputGuard(node, node.get_name())
+    inputs = VerifiedInput(node, guard, key, agent_ids, WINDOW, window_without_key=True)
+    return inputs, MessageLimits.compute(params, len(agent_ids)), key
+
+
+@dataclass
+class Watch:
+    """An observer's guarded subscriptions (watch_run) and its readiness announcer."""
+
+    inputs: VerifiedInput
+    ready: ReadyAnnouncer
+
+    @property
+    def dropped(self):
+        """Messages refused, per reason (for metrics.json's ``dropped``)."""
+        return self.inputs.guard.dropped
+
+
+def watch_run(node, params, agent_ids, add) -> Watch:
     """Subscribe node to what metrics and views of a run read; feed add(topic, msg).
 
     The topics are the world's step, truth and radio traffic and every agent's status and
     search density (records.route); readiness is announced once they are all matched.
     """
-    topics = [('/world/step', WorldStep, WORLD), ('/world/truth', GroundTruth, WORLD),
-              ('/world/radio', RadioTraffic, WORLD)]
+    inputs, limits, key = observer_input(node, params, agent_ids)
+    lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
+
+    def add_density(topic, msg):
+        try:
+            check_grid(msg.grid, lattice)
+        except InvalidMessage as error:
+            inputs.guard.drop(error.reason, f'{topic}: {error.detail}')
+            return
+        add(topic, msg)
+
+    topics = [('/world/step', WorldStep, WORLD, add), ('/world/truth', GroundTruth, WORLD, add),
+              ('/world/radio', RadioTraffic, WORLD, add)]
     for i in agent_ids:
-        topics += [(f'/agent_{i}/status', AgentStatus, STEP),
-                   (f'/agent_{i}/radio/out/search_density', SearchDensity, RADIO)]
-    subscriptions = [node.create_subscription(cls, topic,
-                                              lambda msg, topic=topic: add(topic, msg), qos)
-                     for topic, cls, qos in topics]
-    return ReadyAnnouncer(node, subscriptions)
+        topics += [(f'/agent_{i}/status', AgentStatus, STEP, add),
+                   (radio_topic(i, 'out', 'search_density'), SearchDensity, RADIO, add_density)]
+    subscriptions = [inputs.subscribe(cls, topic,
+                                      lambda msg, topic=topic, take=take: take(topic, msg),
+                                      qos, **signature_of(topic, limits))
+                     for topic, cls, qos, take in topics]
+    return Watch(inputs, ReadyAnnouncer(node, subscriptions, key))

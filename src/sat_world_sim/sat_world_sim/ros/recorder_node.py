@@ -7,23 +7,29 @@ install (with sat_msgs built) plays it back. Timestamps are the receive times (n
 The MCAP chunks are zstd-compressed (rosbag2's MCAP storage reads them natively; metadata.yaml
 says no bag-level compression): ~25 times smaller, mostly the search densities (a 4-agent
 soak: ~0.4 GB per 1,000 steps uncompressed, 14 MB compressed).
+Only verified bytes are recorded (observer.signature_of says how each topic is signed): a
+signed topic's message is size-checked and verified, never deserialized (but /world/step, for
+``finished``), and a refused one is counted on /diagnostics instead of written. The bag keeps
+the signatures: a live replay of it is accepted by nodes with the run's key or with
+authentication off. Standard-typed topics (clock, views, markers) are not signed.
 The node closes the bag and exits after the world's final step, or on Ctrl-C.
 """
 
 import time
 
 from rclpy.node import Node
-from rclpy.serialization import deserialize_message
 from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
 from sat_agent.ros.msg_conversions import message_class
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.ros_params import declare_sat_params
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.ros.observer import declare_run, ReadyAnnouncer
+from sat_world_sim.ros.observer import (declare_run, observer_input, ReadyAnnouncer,
+                                        signature_of)
 from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics
 
@@ -46,7 +52,9 @@ class RecorderNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('recorder', **kwargs)
+        params = declare_sat_params(self)
         run_dir, agent_ids = declare_run(self, 'the bag goes to <run_dir>/bag')
+        self.inputs, limits, key = observer_input(self, params, agent_ids)
         self.path = run_dir / 'bag'
         if self.path.exists():
             raise ValueError(f"parameter 'run_dir' = '{run_dir}': {self.path} exists already")
@@ -66,16 +74,26 @@ class RecorderNode(Node):
                                                     offered_qos_profiles=[bag_qos(qos)])
             subscriptions.append(self.create_subscription(
                 message_class(topic.msgtype), topic.name,
-                lambda data, c=connection, name=topic.name: self._write(c, name, data),
+                lambda data, c=connection, name=topic.name,
+                signature=signature_of(topic.name, limits): self._take(c, name, signature, data),
                 qos, raw=True))
-        self.ready = ReadyAnnouncer(self, subscriptions)
+        self.ready = ReadyAnnouncer(self, subscriptions, key)
         steady_timer(self, 0.2, self._tick)
 
-    def _write(self, connection, name: str, data: bytes):
+    def _take(self, connection, name: str, signature, data: bytes):
+        """Record a message that passes its topic's checks (signature None: not signed)."""
+        if name == '/world/step':
+            msg = self.inputs.receive(name, data, WorldStep, **signature)
+            if msg is None:
+                return
+            if msg.finished:
+                self._finished_at = time.monotonic()
+        elif signature is not None:
+            checks = {k: v for k, v in signature.items() if k != 'names_sender'}
+            if self.inputs.check(name, data, **checks) is False:
+                return
         self.writer.write(connection, time.time_ns(), data)
         self.count += 1
-        if name == '/world/step' and deserialize_message(data, WorldStep).finished:
-            self._finished_at = time.monotonic()
 
     def _tick(self):
         if self._finished_at is not None and time.monotonic() - self._finished_at > FINAL_WAIT_S:

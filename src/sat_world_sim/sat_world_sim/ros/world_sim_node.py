@@ -28,6 +28,15 @@ position and is not waited for until it speaks again. Commands that are not one 
 of Eqn. controlVectors or leave the area are refused with a log line; the agent holds. Every
 command and report is validated (the sender's namespace, the step, the content: the radio never
 forwards garbage); what is dropped is counted per reason on ``/diagnostics``.
+Authentication (sat_agent.message_auth, sat_agent.ros.signed_io): with ``auth_key_file`` set,
+the world signs /world/step, /world/truth, /world/radio and every scan as sender 0, and takes
+each agent's cmd and radio/out raw, refusing (and counting) before deserialization and before
+the duplicate check what is too large (message_limits, also without a key), unsigned, badly
+signed, signed by anyone but that agent, replayed, or not of the current step (or the one
+before, to rejoin): a forged command cannot take an agent's place. The radio relays only for
+the roster, and seals each delivery for its receiver (Signer.seal: one short HMAC per
+delivery); only that seal makes a report acceptable on a radio/in topic. Observers announce
+themselves signed (sat_msgs/ObserverReady), so a forged announcement cannot start the run.
 When the run is over the node publishes a final WorldStep with ``finished`` (the agents exit on
 it) and exits. Its timers run on the steady clock (node_runner.steady_timer): it is the source
 of ``/clock``, so under ``use_sim_time`` its own ROS clock only moves when it steps.
@@ -42,24 +51,26 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
-from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from sat_agent.agent_core import wire_bytes
+from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
 from sat_agent.motion_model import POSITION
 from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
+from sat_agent.ros.message_limits import MessageLimits
 from sat_agent.ros.msg_conversions import (header, InvalidMessage, measurements_to_msg, point,
                                            RADIO_TYPES)
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.ros_params import declare_node_params, declare_sat_params, WORLD_PARAMS
+from sat_agent.ros.signed_io import declare_auth, SignedPublisher, VerifiedInput
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_time, views_due
-from sat_agent.topic_names import CLOCK, TRUTH_MARKERS
-from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet, RadioTraffic,
-                          TargetTruth, WorldStep)
+from sat_agent.topic_names import CLOCK, radio_topic, TRUTH_MARKERS
+from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet,
+                          ObserverReady, RadioTraffic, TargetTruth, WorldStep)
 
 from sat_world_sim.radio import Radio
 from sat_world_sim.ros import observer
@@ -67,6 +78,8 @@ from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
+# The world knows the step: agents' messages of this step, or of the one before (to rejoin).
+WINDOW = StepWindow(behind=1, ahead=0, world_ahead=0)
 DISCOVERY_SETTLE_S = 0.5
 
 
@@ -102,6 +115,13 @@ class WorldSimNode(Node):
         self.ids = self.world.agent_ids
         self.active = set(self.ids)
         self.guard = InputGuard(self, 'world_sim')
+        key = declare_auth(self)
+        self.inputs = VerifiedInput(self, self.guard, key, self.ids, WINDOW)
+        # Observers all sign as the world, each with its own counter: announcements are not
+        # one sequence, and a replayed one only repeats a name (VerifiedInput: replays off).
+        self.announcements = VerifiedInput(self, self.guard, key, (), WINDOW, replays=False)
+        self.limits = MessageLimits.compute(self.params, len(self.ids))
+        self.signer = Signer(key, WORLD_SENDER)
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         # Each report arrives once, so nothing to cache (radio_parsing.py).
         self.radio_parser = RadioParser()
@@ -117,25 +137,28 @@ class WorldSimNode(Node):
 
         self.clock_pub = self.create_publisher(Clock, CLOCK[0], STEP)
         self.markers_pub = self.create_publisher(MarkerArray, TRUTH_MARKERS[0], WORLD)
-        self.step_pub = self.create_publisher(WorldStep, '/world/step', WORLD)
-        self.truth_pub = self.create_publisher(GroundTruth, '/world/truth', WORLD)
-        self.traffic_pub = self.create_publisher(RadioTraffic, '/world/radio', WORLD)
+        self.step_pub = SignedPublisher(self, WorldStep, '/world/step', WORLD, self.signer)
+        self.truth_pub = SignedPublisher(self, GroundTruth, '/world/truth', WORLD, self.signer)
+        self.traffic_pub = SignedPublisher(self, RadioTraffic, '/world/radio', WORLD,
+                                           self.signer)
         self.scan_pubs, self.inbox_pubs = {}, {}
         for i in self.ids:
             ns = f'/agent_{i}'
-            self.scan_pubs[i] = self.create_publisher(MeasurementSet, f'{ns}/measurements',
-                                                      STEP)
-            self.create_subscription(ControlCommand, f'{ns}/cmd',
-                                     lambda msg, i=i: self.on_cmd(i, msg), STEP)
+            self.scan_pubs[i] = SignedPublisher(self, MeasurementSet, f'{ns}/measurements',
+                                                STEP, self.signer)
+            self.inputs.subscribe(ControlCommand, f'{ns}/cmd',
+                                  lambda msg, i=i: self.on_cmd(i, msg), STEP,
+                                  self.limits.command, sender=i)
             for kind, cls in RADIO_TYPES.items():
                 self.inbox_pubs[(i, kind)] = self.create_publisher(
-                    cls, f'{ns}/radio/in/{kind}', RADIO)
+                    cls, radio_topic(i, 'in', kind), RADIO)
                 # Raw: the bytes received are the bytes forwarded, serialised once by the sender.
                 self.create_subscription(
-                    cls, f'{ns}/radio/out/{kind}',
+                    cls, radio_topic(i, 'out', kind),
                     lambda data, i=i, kind=kind: self.on_report(i, kind, data), RADIO, raw=True)
-        self.create_subscription(String, observer.TOPIC,
-                                 lambda m: self._observers_ready.add(m.data), observer.QOS)
+        self.announcements.subscribe(ObserverReady, observer.TOPIC,
+                                     lambda m: self._observers_ready.add(m.name), observer.QOS,
+                                     self.limits.observer, sender=WORLD_SENDER)
         self._launched = time.monotonic()
         steady_timer(self, 0.02, self._tick)
         self.get_logger().info(
@@ -212,13 +235,14 @@ class WorldSimNode(Node):
 
     def _begin_step(self):
         k = self.world.step
+        self.inputs.verifier.step = k
         sec, nanosec = step_time(k, self.dt)
         self.clock_pub.publish(Clock(clock=Time(sec=sec, nanosec=nanosec)))
         delivered = self._forward(self.radio.due(k))
         poses = self.world.poses()
         truth = self.world.truth()
-        self.step_pub.publish(self._step_msg(k, finished=False))
-        self.truth_pub.publish(self._truth_msg(k, poses, truth))
+        self.step_pub.publish(self._step_msg(k, finished=False), k)
+        self.truth_pub.publish(self._truth_msg(k, poses, truth), k)
         if views_due(k, self._last_view_step, self.dt, self.view_rate):
             self._last_view_step = k
             self.markers_pub.publish(views.truth_markers(
@@ -229,7 +253,7 @@ class WorldSimNode(Node):
         for i, scan in self.world.scan_all().items():
             self.scan_pubs[i].publish(measurements_to_msg(
                 i, k, poses[i], scan.measurements, self.dt,
-                delivered[i] if lock_step else 0))
+                delivered[i] if lock_step else 0), k)
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
         now = time.monotonic()
@@ -249,13 +273,13 @@ class WorldSimNode(Node):
     def _finish_step(self):
         k = self.world.step
         # Everything sent at step k is counted by now; links are those of s_k.
-        self.traffic_pub.publish(self._traffic_msg(k, self.world.poses()))
+        self.traffic_pub.publish(self._traffic_msg(k, self.world.poses()), k)
         moves = self.world.apply_actions(self._cmds)
         for agent_id, move in moves.items():
             if not move.accepted and agent_id in self._cmds:
                 self.guard.drop('refused_action', f'step {k}: agent {agent_id}: {move.reason}')
         if k >= self.total_steps:
-            self.step_pub.publish(self._step_msg(k, finished=True))
+            self.step_pub.publish(self._step_msg(k, finished=True), k)
             self.get_logger().info(f'run finished after step {k}')
             self._finished_at = time.monotonic()
             return
@@ -299,11 +323,17 @@ class WorldSimNode(Node):
 
     def on_report(self, agent_id: int, kind: str, data: bytes):
         """Validate an agent's report message and hand it to the radio (never forward garbage)."""
+        channel = radio_topic(agent_id, 'out', kind)
+        signed = self.inputs.check(channel, data, self.limits.radio(kind), sender=agent_id,
+                                   relayed=True)
+        if signed is False:
+            return
         msg, part = self.radio_parser.parse(kind, data, self.lattice)
         if msg is None:
             self.guard.drop(part.reason, f'{kind} of agent {agent_id}: {part.detail}')
             return
-        if not self._current(agent_id, msg, f'radio/out/{kind}'):
+        if not self.inputs.confirm(channel, signed, msg) or \
+                not self._current(agent_id, msg, f'radio/out/{kind}'):
             return
         if kind in self._reports[agent_id]:
             self.guard.drop('duplicate', f'second {kind} of agent {agent_id} at {msg.step}')
@@ -327,10 +357,12 @@ class WorldSimNode(Node):
         self._maybe_finish()
 
     def _forward(self, deliveries) -> Counter:
-        """Publish deliveries (serialised messages) into the receivers' inboxes; count them."""
+        """Seal deliveries (serialised messages) for their receivers, publish them; count them."""
         delivered = Counter()
+        k = self.world.step
         for delivery in deliveries:
-            self.inbox_pubs[(delivery.receiver, delivery.kind)].publish(delivery.payload)
+            inbox = self.inbox_pubs[(delivery.receiver, delivery.kind)]
+            inbox.publish(self.signer.seal(inbox.topic_name, delivery.payload, k))
             delivered[delivery.receiver] += 1
         return delivered
 

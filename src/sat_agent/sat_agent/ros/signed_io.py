@@ -1,0 +1,147 @@
+"""Signed topics on the ROS side: the key parameter, signing publishers, verified subscriptions.
+
+The maths is sat_agent.message_auth (ROS-free); this module moves bytes between it and rclpy:
+
+- ``declare_auth(node)``: the node parameter ``auth_key_file`` (a path, never the key itself:
+  parameters are readable through services, command lines through /proc). '' = authentication
+  off, logged at WARN (message_auth.AUTH_OFF_WARNING) and shown on /diagnostics.
+- ``SignedPublisher``: serializes a message with a zero ``auth`` and publishes the signed bytes.
+  Every signed publish goes through Signer.sign, which refuses payloads shorter than the
+  signature: an empty DDS sample stalls every later sample of its reliable writer.
+- ``VerifiedInput.subscribe``: a raw subscription whose callback, in this order, checks the
+  payload's size (message_limits, also with authentication off), verifies the signature (or a
+  relayed message's seal), deserializes in a try, checks that the fields say what the
+  signature says (sender, step) and only then calls the node's callback with the message. A
+  message refused on the way is counted per reason by the node's InputGuard (/diagnostics)
+  and never deserialized when its size or signature is wrong.
+"""
+
+from typing import Callable, Collection, Optional
+
+from rclpy.serialization import deserialize_message, serialize_message
+
+from sat_agent.message_auth import (AUTH_OFF_WARNING, AuthError, key_from_parameter,
+                                    MessageVerifier, Signed, Signer, StepWindow, WORLD_SENDER)
+
+KEY_PARAMETER = 'auth_key_file'
+
+
+def declare_auth(node) -> Optional[bytes]:
+    """Declare ``auth_key_file`` and return its key (None: authentication off, warned at WARN).
+
+    A key file that cannot be used raises message_auth.KeyFileError (a ValueError naming the
+    path): node_runner prints it as one line and the process exits with code 2.
+    """
+    path = node.declare_parameter(KEY_PARAMETER, '').value
+    key = key_from_parameter(path)
+    if key is None:
+        node.get_logger().warning(AUTH_OFF_WARNING)
+    return key
+
+
+class SignedPublisher:
+    """A publisher of one signed sat_msgs type: publish(msg, step) signs as its node's sender.
+
+    relayed: the type ends with a relay seal after ``auth`` (the radio's types).
+    """
+
+    def __init__(self, node, msg_type, topic: str, qos, signer: Signer, relayed: bool = False):
+        self.publisher = node.create_publisher(msg_type, topic, qos)
+        self.channel = self.publisher.topic_name
+        self.signer = signer
+        self.relayed = relayed
+
+    def publish(self, msg, step: int):
+        """Serialize msg (its auth fields zero), sign it for step and publish the bytes."""
+        self.publisher.publish(self.signer.sign(self.channel, serialize_message(msg), step,
+                                                self.relayed))
+
+    def get_subscription_count(self) -> int:
+        return self.publisher.get_subscription_count()
+
+
+class VerifiedInput:
+    """One node's verifier of signed input; raw subscriptions that refuse before deserializing.
+
+    senders: the roster (agent ids) besides the world; window: message_auth.StepWindow.
+    window_without_key: also apply the step window to the messages' own step fields when
+    authentication is off (the observers: their step window is their only bound on what they
+    keep; agents and world_sim have their own step checks). replays: MessageVerifier's.
+    """
+
+    def __init__(self, node, guard, key: Optional[bytes], senders: Optional[Collection[int]],
+                 window: StepWindow, window_without_key: bool = False, replays: bool = True):
+        self.node = node
+        self.guard = guard
+        self.verifier = MessageVerifier(key, senders, window, replays)
+        self.window_without_key = window_without_key and key is None
+        guard.auth = 'on' if key is not None else 'off'
+
+    def subscribe(self, msg_type, topic: str, callback: Callable, qos, max_bytes: int,
+                  sender: Optional[int] = None, relayed: bool = False,
+                  origin: Optional[Callable[[int], str]] = None, names_sender: bool = True):
+        """Subscribe raw to topic; callback(msg) gets the messages that pass (class docstring).
+
+        sender: the only id allowed to sign on this topic (None: any on the roster); relayed:
+        the type carries a relay seal after the sender's block (not checked); origin: the topic
+        is an inbox of the relay, origin(sender) the topic the sender published on (the seal
+        and the sender's block are checked); names_sender: the message's ``agent_id`` is its
+        sender's (not so in a scan, where it names the receiver).
+        """
+        channel = self.node.resolve_topic_name(topic)
+
+        def on_data(data: bytes):
+            msg = self.receive(channel, data, msg_type, max_bytes, sender, relayed, origin,
+                               names_sender)
+            if msg is not None:
+                callback(msg)
+        return self.node.create_subscription(msg_type, topic, on_data, qos, raw=True)
+
+    def receive(self, channel: str, data: bytes, msg_type, max_bytes: int,
+                sender: Optional[int] = None, relayed: bool = False,
+                origin: Optional[Callable[[int], str]] = None, names_sender: bool = True):
+        """Return the message of data if it passes every check, else None (counted)."""
+        signed = self.check(channel, data, max_bytes, sender, relayed, origin)
+        if signed is False:
+            return None
+        try:
+            msg = deserialize_message(data, msg_type)
+        except Exception as error:     # rclpy raises different types for different CDR defects
+            self.guard.drop('undecodable', f'{channel}: not a {msg_type.__name__} ({error})')
+            return None
+        return msg if self.confirm(channel, signed, msg, names_sender) else None
+
+    def check(self, channel: str, data: bytes, max_bytes: int, sender: Optional[int] = None,
+              relayed: bool = False, origin: Optional[Callable[[int], str]] = None):
+        """Check size and signature; return the sender's Signed block (None without a key).
+
+        Returns False (counted) when the message must be dropped.
+        """
+        try:
+            if origin is not None:
+                return self.verifier.verify_delivery(channel, data, origin, max_bytes)
+            return self.verifier.verify(channel, data, relayed, sender, max_bytes)
+        except AuthError as error:
+            self.guard.drop(error.reason, error.detail)
+            return False
+
+    def confirm(self, channel: str, signed: Optional[Signed], msg,
+                names_sender: bool = True) -> bool:
+        """Whether msg's own step and sender fields agree with its signature (counted if not).
+
+        Without a key (and window_without_key) the message's step is held to the window instead.
+        """
+        step = getattr(msg, 'step', None)
+        if step is None:
+            return True
+        agent = getattr(msg, 'agent_id', None) if names_sender else None
+        try:
+            if signed is None and self.window_without_key:
+                self.verifier.check_window(channel, WORLD_SENDER if agent is None else agent,
+                                           int(step))
+            else:
+                self.verifier.confirm(signed, int(step), agent)
+        except AuthError as error:
+            self.guard.drop(error.reason, error.detail)
+            return False
+        return True

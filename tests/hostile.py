@@ -1,0 +1,142 @@
+"""A hostile participant for the attack tests, and a short signed swarm to attack.
+
+``Hostile`` is an rclpy node of the test process on the swarm's ROS domain: it publishes raw
+bytes on any topic (garbage, forged messages, replays of genuine ones it captured) and, as an
+insider, can sign with the run's key. ``Diagnostics`` reads what the nodes count on
+/diagnostics. ``signed_swarm`` starts world_sim, the metrics node, optionally the recorder
+and the logger, and two agents, all with one key file; the test node is one more observer the
+world waits for, so every attack can be timed on the steps it sees.
+"""
+
+from contextlib import contextmanager, ExitStack
+import json
+from pathlib import Path
+import time
+from typing import Dict, List, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray
+import rclpy
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import deserialize_message, serialize_message
+from ros_harness import executable, PARAMS, started
+
+from sat_agent.message_auth import create_key_file, Signer
+from sat_world_sim.ros.observer import ReadyAnnouncer
+
+DEPTH = 300
+RELIABLE = QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED = QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def forge(msg, topic: str, step: int, sender: int, key: Optional[bytes],
+          relayed: bool = False) -> bytes:
+    """Serialize msg and sign it for topic as sender (key None: unsigned, a zero tail)."""
+    return Signer(key, sender).sign(topic, serialize_message(msg), step, relayed)
+
+
+class Hostile:
+    """Publishes raw bytes anywhere, captures genuine messages raw for replays."""
+
+    def __init__(self, node):
+        self.node = node
+        self._publishers = {}
+        self.captured: Dict[str, List[bytes]] = {}
+
+    def send(self, topic: str, msg_type, data: bytes, qos=RELIABLE):
+        """Publish data (serialized bytes, valid or not) on topic as msg_type."""
+        key = (topic, msg_type, qos.durability)
+        if key not in self._publishers:
+            self._publishers[key] = self.node.create_publisher(msg_type, topic, qos)
+        self._publishers[key].publish(data)
+
+    def publisher_ready(self, topic: str, msg_type, qos=RELIABLE) -> bool:
+        """Whether the publisher of topic has matched a reader yet (created on first call)."""
+        key = (topic, msg_type, qos.durability)
+        if key not in self._publishers:
+            self._publishers[key] = self.node.create_publisher(msg_type, topic, qos)
+        return self._publishers[key].get_subscription_count() > 0
+
+    def capture(self, topic: str, msg_type, qos=RELIABLE, callback=None):
+        """Keep every raw message of topic in captured[topic]; callback(data) on each."""
+        self.captured[topic] = []
+
+        def on_data(data):
+            self.captured[topic].append(bytes(data))
+            if callback is not None:
+                callback(data)
+        return self.node.create_subscription(msg_type, topic, on_data, qos, raw=True)
+
+
+class Diagnostics:
+    """The last counters each node published on /diagnostics, by node name."""
+
+    def __init__(self, node):
+        self.values: Dict[str, Dict[str, str]] = {}
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on, 100)
+
+    def _on(self, msg):
+        for status in msg.status:
+            self.values[status.name.split(':')[0]] = {v.key: v.value for v in status.values}
+
+    def dropped(self, node: str, reason: str) -> int:
+        """Messages node (e.g. '/world_sim', '/agent_1/agent') dropped for reason so far."""
+        return int(self.values.get(node, {}).get(f'dropped.{reason}', 0))
+
+    def dropped_all(self, node: str) -> Dict[str, int]:
+        return {k[len('dropped.'):]: int(v) for k, v in self.values.get(node, {}).items()
+                if k.startswith('dropped.')}
+
+
+@contextmanager
+def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[Path],
+                 observers=('metrics',), test_observers: int = 1, extra_world=()):
+    """Start world_sim, the observers and agents 1 and 2 of scenario, with key_file (None: off).
+
+    Yields a dict name -> Popen; world_sim waits for len(observers) + test_observers observers
+    (the test announces itself with announce()). Everything is stopped at the end.
+    """
+    run_dir = tmp_path / 'run'
+    key = ('-p', f'auth_key_file:={key_file}') if key_file else ()
+    params = ('--ros-args', '--params-file', str(PARAMS), *key)
+    ids = ('-p', 'agent_ids:=[1,2]')
+    commands = {
+        'world_sim': [executable('sat_world_sim', 'world_sim'), *params,
+                      '-p', f'scenario:={scenario}', '-p', f'steps:={steps}',
+                      '-p', f'observers:={len(observers) + test_observers}', *extra_world],
+        **{name: [executable('sat_world_sim', name), *params, '-p', f'run_dir:={run_dir}', *ids]
+           for name in observers},
+        **{f'agent_{i}': [executable('sat_agent', 'agent'), *params, '-r', f'__ns:=/agent_{i}',
+                          '-p', f'agent_id:={i}', *ids] for i in (1, 2)}}
+    with ExitStack() as stack:
+        yield {name: stack.enter_context(started(command, tmp_path / f'{name}.log'))
+               for name, command in commands.items()}
+
+
+def new_key(tmp_path: Path) -> Path:
+    """Return a fresh key file (0600) for one test's swarm."""
+    return create_key_file(tmp_path / 'swarm.key')
+
+
+def announce(node, subscriptions, key: Optional[bytes]) -> ReadyAnnouncer:
+    """Tell world_sim this test is ready once its subscriptions matched (signed with key)."""
+    return ReadyAnnouncer(node, subscriptions, key)
+
+
+def spin_until(node, done, timeout: float, processes=()) -> bool:
+    """Spin node until done() or timeout; fail at once if a process died with an error."""
+    deadline = time.monotonic() + timeout
+    while not done() and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+        for process in processes:
+            assert process.poll() in (None, 0), f'{process.args[0]} exited {process.poll()}'
+    return done()
+
+
+def read_metrics(tmp_path: Path) -> Optional[dict]:
+    path = tmp_path / 'run' / 'metrics.json'
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def decode(data: bytes, msg_type):
+    return deserialize_message(data, msg_type)

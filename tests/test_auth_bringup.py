@@ -1,0 +1,87 @@
+"""The bring-up's key handling, and the paper run with authentication on and off (issue 17)."""
+
+import os
+from pathlib import Path
+import stat
+import subprocess
+import sys
+
+import pytest
+from ros_harness import executable, REPO, run_swarm
+
+from sat_world_sim import bringup
+
+PAPER = REPO / 'config' / 'scenarios' / 'paper.yaml'
+
+
+def options(*argv):
+    return bringup.absolute(bringup.parse_args(['--run-dir', '/tmp/unused-run', *argv]))
+
+
+def test_a_run_key_is_made_in_a_private_directory_outside_the_run_and_passed_as_a_path():
+    opts = options()
+    key_dir = bringup.run_key(opts)
+    try:
+        assert stat.S_IMODE(key_dir.stat().st_mode) == 0o700
+        assert stat.S_IMODE(Path(opts.key_file).stat().st_mode) == 0o600
+        assert Path(opts.key_file).parent == key_dir
+        assert not Path(opts.key_file).is_relative_to(opts.run_dir)
+        processes = bringup.process_list(opts, [1, 2], 1)
+        for process in processes:
+            assert f'auth_key_file:={opts.key_file}' in process.ros_arguments, process.name
+            # The key's path only: the key itself never appears on a command line.
+            assert Path(opts.key_file).read_bytes().hex() not in ' '.join(process.command())
+    finally:
+        for path in (Path(opts.key_file), key_dir):
+            path.unlink() if path.is_file() else path.rmdir()
+
+
+def test_a_given_key_file_or_no_auth_makes_no_key():
+    assert bringup.run_key(options('--no-auth')) is None
+    given = options('--key-file', '/some/key')
+    assert bringup.run_key(given) is None and given.key_file == '/some/key'
+    assert not any('auth_key_file' in ' '.join(p.ros_arguments)
+                   for p in bringup.process_list(options('--no-auth'), [1], 1))
+
+
+@pytest.mark.parametrize('content, mode, problem', [
+    (None, None, 'cannot open it'), (b'short', 0o600, '5 bytes'),
+    (os.urandom(32), 0o644, 'chmod 600')])
+def test_a_bad_key_file_stops_the_bring_up_before_anything_starts(
+        tmp_path, content, mode, problem):
+    key = tmp_path / 'swarm.key'
+    if content is not None:
+        key.write_bytes(content)
+        key.chmod(mode)
+    run_dir = tmp_path / 'run'
+    result = subprocess.run(
+        [sys.executable, executable('sat_world_sim', 'swarm'), '--scenario', str(PAPER),
+         '--run-dir', str(run_dir), '--key-file', str(key)],
+        capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and str(key) in lines[0] and problem in lines[0], result.stderr
+    assert not run_dir.exists()
+
+
+def test_no_auth_and_a_key_file_together_are_refused(tmp_path):
+    with pytest.raises(bringup.KeyFileError, match='choose one'):
+        bringup.check_auth(options('--no-auth', '--key-file', str(tmp_path / 'k')))
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(300)
+def test_the_paper_run_gives_the_same_metrics_with_authentication_on_and_off(tmp_path):
+    texts = {}
+    for name, flags in (('on', ()), ('off', ('--no-auth',))):
+        code, metrics, output = run_swarm(tmp_path / name, PAPER, '--steps', '40', '--no-view',
+                                          '--no-record', *flags)
+        assert code == 0, output[-3000:]
+        assert metrics['dropped'] == {}
+        texts[name] = (tmp_path / name / 'metrics.json').read_text()
+        log = (tmp_path / name / 'logs' / 'agent_1.log').read_text()
+        assert ('authentication is OFF' in log) == (name == 'off')
+    assert 'authentication is OFF' in output   # the bring-up's own warning
+    assert texts['on'] == texts['off']
+    # The run's key directory is gone; nothing of it is left in the run directory.
+    assert not list((tmp_path / 'on').rglob('*.key'))
