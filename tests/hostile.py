@@ -19,6 +19,7 @@ import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
 from ros_harness import executable, PARAMS, started
+import yaml
 
 from sat_agent.message_auth import create_key_file, Signer
 from sat_world_sim.ros.observer import ReadyAnnouncer
@@ -57,6 +58,10 @@ class Hostile:
             self._publishers[key] = self.node.create_publisher(msg_type, topic, qos)
         return self._publishers[key].get_subscription_count() > 0
 
+    def announce(self, subscriptions, key: Optional[bytes]) -> ReadyAnnouncer:
+        """Tell world_sim the test is ready once its subscriptions matched (signed with key)."""
+        return ReadyAnnouncer(self.node, subscriptions, key)
+
     def capture(self, topic: str, msg_type, qos=RELIABLE, callback=None):
         """Keep every raw message of topic in captured[topic]; callback(data) on each."""
         self.captured[topic] = []
@@ -90,24 +95,27 @@ class Diagnostics:
 
 @contextmanager
 def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[Path],
-                 observers=('metrics',), test_observers: int = 1, extra_world=()):
+                 observers=('metrics',), extra=()):
     """Start world_sim, the observers and agents 1 and 2 of scenario, with key_file (None: off).
 
-    Yields a dict name -> Popen; world_sim waits for len(observers) + test_observers observers
-    (the test announces itself with announce()). Everything is stopped at the end.
+    Yields a dict name -> Popen; world_sim waits for the observers and for the test itself
+    (Hostile.announce). extra: ROS arguments for every process. Everything is stopped at the
+    end.
     """
     run_dir = tmp_path / 'run'
     key = ('-p', f'auth_key_file:={key_file}') if key_file else ()
-    params = ('--ros-args', '--params-file', str(PARAMS), *key)
+    params = ('--ros-args', '--params-file', str(PARAMS), *key, *extra)
+    # world_sim and the agents draw from the scenario's seed, as in the bring-up.
+    seed = ('-p', f"seed:={yaml.safe_load(scenario.read_text())['seed']}")
     ids = ('-p', 'agent_ids:=[1,2]')
     commands = {
         'world_sim': [executable('sat_world_sim', 'world_sim'), *params,
                       '-p', f'scenario:={scenario}', '-p', f'steps:={steps}',
-                      '-p', f'observers:={len(observers) + test_observers}', *extra_world],
+                      '-p', f'observers:={len(observers) + 1}', *seed],
         **{name: [executable('sat_world_sim', name), *params, '-p', f'run_dir:={run_dir}', *ids]
            for name in observers},
         **{f'agent_{i}': [executable('sat_agent', 'agent'), *params, '-r', f'__ns:=/agent_{i}',
-                          '-p', f'agent_id:={i}', *ids] for i in (1, 2)}}
+                          '-p', f'agent_id:={i}', *ids, *seed] for i in (1, 2)}}
     with ExitStack() as stack:
         yield {name: stack.enter_context(started(command, tmp_path / f'{name}.log'))
                for name, command in commands.items()}
@@ -116,11 +124,6 @@ def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[
 def new_key(tmp_path: Path) -> Path:
     """Return a fresh key file (0600) for one test's swarm."""
     return create_key_file(tmp_path / 'swarm.key')
-
-
-def announce(node, subscriptions, key: Optional[bytes]) -> ReadyAnnouncer:
-    """Tell world_sim this test is ready once its subscriptions matched (signed with key)."""
-    return ReadyAnnouncer(node, subscriptions, key)
 
 
 def spin_until(node, done, timeout: float, processes=()) -> bool:

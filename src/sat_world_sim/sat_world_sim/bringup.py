@@ -23,6 +23,11 @@ instead (to run agents on several machines, each with a copy of it); it is check
 anything starts. ``--no-auth`` runs without authentication, with a loud warning in every
 process.
 
+``--netns`` (root only) places world_sim and the observers on one host and each agent process
+on its own: Linux network namespaces on a private bridge (sat_world_sim.netns), DDS over UDP
+only, discovery through static peers (sat_world_sim.dds_udp; the profile is written to
+``<run-dir>/dds/udp.xml``). The run is the same run as on one host; only the transport differs.
+
 The run ends when the observers (metrics, recorder, logger) have exited, after the world's last
 step; then every process still running is stopped (SIGINT, then SIGKILL after a grace period).
 The agents exit by themselves when the world says the run is finished. Ctrl-C stops everything
@@ -46,19 +51,21 @@ import sys
 import tempfile
 import threading
 import time
-from typing import Dict, List, Mapping, Optional, Sequence, Tuple
+from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
 
 from sat_agent.config import load_params_file, ParameterError
 from sat_agent.message_auth import AUTH_OFF_WARNING, create_key_file, KeyFileError, load_key
 
+from sat_world_sim import dds_udp, netns
 from sat_world_sim.scenario import load_scenario, ScenarioError
 
 STOP_GRACE_S = 5.0
 MAX_RESPAWNS = 5
 # Options of the supervision only (not of the run): the launch file has no use for them.
-SUPERVISION_OPTIONS = ('timeout', 'quiet', 'print_ros2_run')
+# (--netns places the processes itself; a launch file would use launch_ros's prefix.)
+SUPERVISION_OPTIONS = ('timeout', 'quiet', 'print_ros2_run', 'netns')
 
 
 def executable(package: str, name: str) -> str:
@@ -96,21 +103,28 @@ class Process:
                            '--ros-args', *self.ros_arguments])
 
 
+def _same_host(argv: List[str]) -> List[str]:
+    return argv
+
+
 @dataclass
 class Child:
-    """One managed process."""
+    """One managed process; place wraps its command to run on its host (--netns)."""
 
     spec: Process
     process: Optional[subprocess.Popen] = None
     respawns: int = 0
     pumps: List[threading.Thread] = field(default_factory=list)
+    place: Callable[[List[str]], List[str]] = _same_host
+    env: Optional[dict] = None   # this child's environment, if not the run's
 
     @property
     def name(self) -> str:
         return self.spec.name
 
     def start(self, env: dict, log_dir: Path, echo: bool):
-        self.process = subprocess.Popen(self.spec.command(), env=env, stdout=subprocess.PIPE,
+        self.process = subprocess.Popen(self.place(self.spec.command()),
+                                        env=self.env or env, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, bufsize=1,
                                         start_new_session=True)
         # Line-buffered: the log shows each line as it comes, not at the end of the run.
@@ -321,6 +335,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--key-file', default=None,
                         help='swarm key file (>= 32 random bytes, mode 0600) to sign with, e.g. '
                              'shared by the machines of one swarm (default: a new key per run)')
+    parser.add_argument('--netns', action='store_true',
+                        help='world_sim and the observers on one network namespace, each agent '
+                             'process on its own, DDS over UDP between them (root only)')
     parser.add_argument('--no-auth', action='store_true',
                         help='no message authentication: any process on the ROS domain can '
                              'forge commands, scans and reports (default: on)')
@@ -388,15 +405,35 @@ def absolute(options) -> argparse.Namespace:
     return argparse.Namespace(**{**vars(options), **paths})
 
 
+def host_of(process: Process) -> str:
+    """Return the --netns host of a process: 'world' for world_sim and observers, else its name."""
+    return process.name if process.package == 'sat_agent' else 'world'
+
+
+def place_on_hosts(children: Sequence[Child], net, env: dict, run_dir: Path):
+    """Run each child on its host of net (a NetnsBridge), talking DDS over UDP (dds_udp)."""
+    profile = Path(run_dir) / 'dds' / 'udp.xml'
+    profile.parent.mkdir(parents=True, exist_ok=True)
+    profile.write_text(dds_udp.udp_profile_xml(Path(env['FASTRTPS_DEFAULT_PROFILES_FILE'])),
+                       encoding='utf-8')
+    for child in children:
+        host = host_of(child.spec)
+        child.place = lambda argv, host=host: net.command(host, argv)
+        child.env = dds_udp.udp_env(env, profile, peers=net.peers_of(host))
+
+
 def run(processes: Sequence[Process], env: dict, run_dir: Path, timeout: float,
-        echo: bool) -> int:
+        echo: bool, net=None) -> int:
     """Start the processes, supervise them until the run is over, stop what is left.
 
+    net: a NetnsBridge with a host per host_of (--netns), None for this host.
     Returns the exit code (supervise; 130 on Ctrl-C; 1 when no metrics.json was written).
     """
     log_dir = Path(run_dir) / 'logs'
     log_dir.mkdir(parents=True, exist_ok=True)
     children = [Child(process) for process in processes]
+    if net is not None:
+        place_on_hosts(children, net, env, run_dir)
     code = 1
     try:
         for child in children:
@@ -425,6 +462,23 @@ def load_run(options) -> List[Process]:
     return process_list(options, scenario.agent_ids, scenario.seed)
 
 
+def check_netns(options):
+    """Check that --netns can make namespaces here (NetnsError says why not)."""
+    reason = netns.unavailable() if options.netns else None
+    if reason:
+        raise netns.NetnsError(f'--netns: {reason}')
+
+
+def run_on_hosts(processes: Sequence[Process], env: dict, options) -> int:
+    """Run the processes on this host, or with --netns each on its host (host_of)."""
+    args = (processes, env, Path(options.run_dir), options.timeout, not options.quiet)
+    if not options.netns:
+        return run(*args)
+    hosts = sorted({host_of(p) for p in processes})
+    with netns.NetnsBridge(hosts) as net:
+        return run(*args, net=net)
+
+
 def check_auth(options):
     """Check the authentication options before anything starts (KeyFileError names the path)."""
     if options.no_auth and options.key_file:
@@ -451,7 +505,8 @@ def main(argv=None) -> int:
     options = args if args.print_ros2_run else absolute(args)
     try:
         check_auth(options)
-    except KeyFileError as error:
+        check_netns(options)
+    except (KeyFileError, netns.NetnsError) as error:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
     key_dir = None if args.print_ros2_run else run_key(options)
@@ -471,7 +526,7 @@ def main(argv=None) -> int:
         agents = sum(p.executable == 'agent' for p in processes) or 'composed'
         print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {agents} agents, "
               f'{options.clock}, run dir {args.run_dir}', file=sys.stderr)
-        code = run(processes, env, Path(options.run_dir), options.timeout, not options.quiet)
+        code = run_on_hosts(processes, env, options)
     finally:
         if key_dir is not None:
             shutil.rmtree(key_dir, ignore_errors=True)

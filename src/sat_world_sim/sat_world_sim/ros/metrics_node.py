@@ -5,7 +5,8 @@ and ``radio/out/search_density``, hands every message to records.RunCollector (t
 offline replay of a bag uses) and, once the world's ``finished`` step and the last step's data
 are in, writes ``<run_dir>/metrics.json`` (with ``dropped``: what it refused, per reason) and
 ``<run_dir>/plots/*.png`` and exits. Its input is verified and bounded (observer.watch_run):
-a forged ``finished`` or truth is refused before it is deserialized. Its memory
+a forged ``finished`` or truth is refused before it is deserialized. It exits with code 1
+(and the bring-up with it) when metrics.json lacks a step of the run. Its memory
 stays flat over long runs: the collector keeps the messages of the last records.SETTLE_STEPS
 steps, a compact record of each earlier step and each agent's last search density.
 """
@@ -46,8 +47,14 @@ class MetricsNode(Node):
             return
         area = (self.params.area.width, self.params.area.height)
         metrics = self.collector.write(self.run_dir, area, self.watch.dropped)
-        self.get_logger().info(
-            f"wrote {self.run_dir / 'metrics.json'} ({len(metrics['steps'])} steps)")
+        steps, last = len(metrics['steps']), int(self.collector.final.step)
+        if steps != last:
+            # Incomplete results fail the run (the bring-up's exit code), though written.
+            self.get_logger().error(f"wrote {self.run_dir / 'metrics.json'} with {steps} of "
+                                    f'{last} steps: the ground truth of some steps was lost')
+            finish_run(self, 1)
+            return
+        self.get_logger().info(f"wrote {self.run_dir / 'metrics.json'} ({steps} steps)")
         finish_run(self, 0)
 
 
