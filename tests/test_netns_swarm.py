@@ -7,30 +7,22 @@ authentication on it must still complete.
 """
 
 import pytest
-from ros_harness import REPO, run_swarm, write_scenario
+from ros_harness import REPO, run_swarm
 from test_swarm_ros import inprocess_metrics
-import yaml
 
 from sat_world_sim.netns import unavailable
 
 UNAVAILABLE = unavailable()
 pytestmark = [pytest.mark.ros,
               pytest.mark.skipif(UNAVAILABLE is not None, reason=str(UNAVAILABLE))]
-STEPS = 60
-
-
-@pytest.fixture
-def paper(tmp_path):
-    """Return the paper scenario cut to STEPS steps (in-process swarms run a scenario's steps)."""
-    document = yaml.safe_load((REPO / 'config' / 'scenarios' / 'paper.yaml').read_text())
-    return write_scenario(tmp_path / 'paper.yaml', **{**document, 'steps': STEPS})
+PAPER = REPO / 'config' / 'scenarios' / 'paper.yaml'
 
 
 @pytest.mark.timeout(300)
-def test_three_namespaces_give_the_one_host_metrics(tmp_path, paper):
-    code, metrics, output = run_swarm(tmp_path / 'run', paper, '--netns', '--no-view')
+def test_three_namespaces_give_the_one_host_metrics(tmp_path):
+    code, metrics, output = run_swarm(tmp_path / 'run', PAPER, '--netns', '--no-view')
     assert code == 0, output[-3000:]
-    assert metrics == inprocess_metrics(paper)
+    assert metrics == inprocess_metrics(PAPER)
     logs = tmp_path / 'run' / 'logs'
     # Over UDP between namespaces: the profile has no shared memory, and the agents were
     # really elsewhere (their own namespace, their own address).
@@ -39,11 +31,11 @@ def test_three_namespaces_give_the_one_host_metrics(tmp_path, paper):
 
 
 @pytest.mark.timeout(300)
-def test_a_lossy_radio_across_namespaces_with_authentication_completes(tmp_path, paper):
-    code, metrics, output = run_swarm(tmp_path / 'run', paper, '--netns', '--no-view',
+def test_a_lossy_radio_across_namespaces_with_authentication_completes(tmp_path):
+    code, metrics, output = run_swarm(tmp_path / 'run', PAPER, '--netns', '--no-view',
                                       '--no-record', '--radio-loss', '0.3')
     assert code == 0, output[-3000:]
-    assert [s['step'] for s in metrics['steps']] == list(range(1, STEPS + 1))
+    assert [s['step'] for s in metrics['steps']] == list(range(1, 201))
     assert metrics['dropped'] == {}
 
 
