@@ -11,14 +11,12 @@ world waits for, so every attack can be timed on the steps it sees.
 from contextlib import contextmanager, ExitStack
 import json
 from pathlib import Path
-import time
 from typing import Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray
-import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
-from ros_harness import executable, PARAMS, started
+from ros_harness import executable, PARAMS, started, write_scenario
 import yaml
 
 from sat_agent.message_auth import create_key_file, Signer
@@ -126,14 +124,13 @@ def new_key(tmp_path: Path) -> Path:
     return create_key_file(tmp_path / 'swarm.key')
 
 
-def spin_until(node, done, timeout: float, processes=()) -> bool:
-    """Spin node until done() or timeout; fail at once if a process died with an error."""
-    deadline = time.monotonic() + timeout
-    while not done() and time.monotonic() < deadline:
-        rclpy.spin_once(node, timeout_sec=0.05)
-        for process in processes:
-            assert process.poll() in (None, 0), f'{process.args[0]} exited {process.poll()}'
-    return done()
+def near_scenario(tmp_path: Path, seed: int, steps: int) -> Path:
+    """Write a scenario of two agents in radio range and one target between them."""
+    return write_scenario(
+        tmp_path / 'near.yaml', name='near', seed=seed, steps=steps, truth_process_noise=1e-4,
+        agents=[{'id': 1, 'start': [44.0, 50.0]}, {'id': 2, 'start': [56.0, 50.0]}],
+        targets=[{'id': 1, 'born': 1, 'died': steps, 'start': [50.0, 46.0],
+                  'end': [57.0, 46.0]}])
 
 
 def read_metrics(tmp_path: Path) -> Optional[dict]:

@@ -15,14 +15,13 @@ import os
 import zlib
 
 from geometry_msgs.msg import Point
-from hostile import (Diagnostics, forge, Hostile, LATCHED, new_key, read_metrics, RELIABLE,
-                     signed_swarm, spin_until)
+from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
+                     read_metrics, RELIABLE, signed_swarm)
 import pytest
 import rclpy
 from rclpy.serialization import deserialize_message, serialize_message
-from ros_harness import write_scenario
 from test_attack_swarm import genuine_scan, scan_step, without_dropped
-from test_swarm_ros import inprocess_metrics
+from test_swarm_ros import inprocess_metrics, spin_until
 
 from sat_agent.message_auth import load_key, MonotonicCounter, Signer, WORLD_SENDER
 from sat_agent.topic_names import radio_topic
@@ -122,11 +121,7 @@ class Attacker:
 def attacked(tmp_path_factory):
     """Run the attacked swarm; return (metrics, expected, attacker, diagnostics, codes)."""
     tmp_path = tmp_path_factory.mktemp('observers')
-    scenario = write_scenario(
-        tmp_path / 'near.yaml', name='near', seed=4, steps=STEPS, truth_process_noise=1e-4,
-        agents=[{'id': 1, 'start': [44.0, 50.0]}, {'id': 2, 'start': [56.0, 50.0]}],
-        targets=[{'id': 1, 'born': 1, 'died': STEPS, 'start': [50.0, 46.0],
-                  'end': [56.0, 46.0]}])
+    scenario = near_scenario(tmp_path, 4, STEPS)
     key_file = new_key(tmp_path)
     key = load_key(key_file)
     rclpy.init()

@@ -14,13 +14,12 @@ metrics equal the in-process swarm's for the same scenario and seed.
 from collections import Counter
 
 from geometry_msgs.msg import Point
-from hostile import (Diagnostics, forge, Hostile, LATCHED, new_key, read_metrics, RELIABLE,
-                     signed_swarm, spin_until)
+from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
+                     read_metrics, RELIABLE, signed_swarm)
 import pytest
 import rclpy
 from rclpy.serialization import deserialize_message
-from ros_harness import write_scenario
-from test_swarm_ros import inprocess_metrics
+from test_swarm_ros import inprocess_metrics, spin_until
 
 from sat_agent.message_auth import (AuthError, load_key, MessageVerifier, Signer, StepWindow,
                                     WORLD_SENDER)
@@ -96,11 +95,7 @@ def attack(hostile, sent, k, key):
 def attacked(tmp_path_factory):
     """Run the attacked swarm once; return (metrics, expected metrics, sent, diagnostics)."""
     tmp_path = tmp_path_factory.mktemp('attacked')
-    scenario = write_scenario(
-        tmp_path / 'near.yaml', name='near', seed=3, steps=STEPS, truth_process_noise=1e-4,
-        agents=[{'id': 1, 'start': [44.0, 50.0]}, {'id': 2, 'start': [56.0, 50.0]}],
-        targets=[{'id': 1, 'born': 1, 'died': STEPS, 'start': [50.0, 46.0],
-                  'end': [58.0, 46.0]}])
+    scenario = near_scenario(tmp_path, 3, STEPS)
     key_file = new_key(tmp_path)
     key = load_key(key_file)
     sent = Counter()
