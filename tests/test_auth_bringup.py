@@ -5,6 +5,7 @@ from pathlib import Path
 import stat
 import subprocess
 import sys
+import time
 
 import pytest
 from ros_harness import executable, REPO, run_swarm
@@ -85,3 +86,26 @@ def test_the_paper_run_gives_the_same_metrics_with_authentication_on_and_off(tmp
     assert texts['on'] == texts['off']
     # The run's key directory is gone; nothing of it is left in the run directory.
     assert not list((tmp_path / 'on').rglob('*.key'))
+
+
+def test_a_childs_log_shows_each_line_while_the_child_runs(tmp_path):
+    """Logs are line-buffered: runs/<name>/logs/ is readable during the run, not at its end."""
+    class Talker:
+        name = 'talker'
+
+        def command(self):
+            # Prints a line, then keeps running until stopped.
+            return [sys.executable, '-c', 'import time; print("first line"); time.sleep(60)']
+
+    child = bringup.Child(Talker())
+    child.start(dict(os.environ, PYTHONUNBUFFERED='1'), tmp_path, echo=False)
+    log = tmp_path / 'talker.log'
+    try:
+        deadline = time.monotonic() + 30
+        while 'first line' not in log.read_text() and time.monotonic() < deadline:
+            # Wait on the pump thread (it writes the log), not on a clock.
+            child.pumps[0].join(timeout=0.05)
+        assert 'first line' in log.read_text()
+        assert child.poll() is None
+    finally:
+        child.stop()

@@ -5,13 +5,17 @@
 
 The launch arguments are the bring-up's run options (``ros2 launch ... --show-args`` lists
 them: scenario, params, run_dir, clock, period, agent_timeout, seed, steps, radio_loss,
-radio_delay, composed, respawn, record, view, view_rate, fastdds_profile, domain_id), and the
+radio_delay, composed, respawn, record, view, view_rate, fastdds_profile, domain_id,
+key_file, no_auth), and the
 processes, their arguments and their environment come from the bring-up's own
 ``process_list`` and ``run_env`` (sat_world_sim.bringup): one source of truth, checked by
 tests/test_launch_parity.py. Every process runs with ``use_sim_time`` and the run's seed
 (the scenario's unless ``seed`` is given). The launch ends, like the bring-up, once every
 observer (metrics, recorder, logger) has exited; the agents exit by themselves when the world
 says the run is finished.
+
+Authentication: the launch makes no key; give one with ``key_file:=<path>`` (0600, >= 32 random
+bytes), else every node runs without signatures and warns (README, "Trust model").
 
 ``processes(values)`` needs no launch package, so the process list can be checked (and run)
 where launch is not installed.
