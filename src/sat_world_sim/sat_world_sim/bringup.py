@@ -21,7 +21,6 @@ import argparse
 from dataclasses import dataclass, field
 import os
 from pathlib import Path
-import random
 import signal
 import subprocess
 import sys
@@ -33,6 +32,7 @@ from ament_index_python.packages import get_package_prefix, get_package_share_di
 
 from sat_agent.config import load_params_file, ParameterError
 
+from sat_world_sim.domain_ids import claim_domain_id, NoFreeDomain
 from sat_world_sim.scenario import load_scenario, ScenarioError
 
 STOP_GRACE_S = 5.0
@@ -111,11 +111,6 @@ def _prefix_lines(name: str, stream, log, echo: bool):
     stream.close()
 
 
-def private_domain_id() -> int:
-    """Pick a ROS_DOMAIN_ID for this run only (1..100), so parallel runs do not see each other."""
-    return random.Random(f'{os.getpid()}-{time.time_ns()}').randrange(1, 101)
-
-
 def ros_env(domain_id: Optional[int]) -> dict:
     """Return the children's environment: private domain, discovery on this host only.
 
@@ -123,7 +118,8 @@ def ros_env(domain_id: Optional[int]) -> dict:
     user names a profile file of their own.
     """
     env = dict(os.environ)
-    env['ROS_DOMAIN_ID'] = str(domain_id if domain_id is not None else private_domain_id())
+    # The bring-up process holds the claimed id until it exits, after its children.
+    env['ROS_DOMAIN_ID'] = str(domain_id if domain_id is not None else claim_domain_id())
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
     env.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(
@@ -224,7 +220,8 @@ def parse_args(argv):
                              'on 127.0.0.1 (run.rrd is written in every case)')
     parser.add_argument('--no-view', action='store_true', help='no Rerun logger')
     parser.add_argument('--domain-id', type=int, default=None,
-                        help='ROS_DOMAIN_ID (default: a private one for this run)')
+                        help='ROS_DOMAIN_ID (default: one no other run on this machine holds, '
+                             'from 1..89; sat_world_sim/domain_ids.py)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')
     parser.add_argument('--quiet', action='store_true',
                         help="only write the processes' output to <run-dir>/logs/, not stderr")
@@ -237,10 +234,10 @@ def main(argv=None) -> int:
         params = load_params_file(args.params)
         scenario = load_scenario(args.scenario, params.area.width, params.area.height)
         children = build_children(args, scenario.agent_ids, scenario.seed)
-    except (ParameterError, ScenarioError, OSError) as error:
+        env = ros_env(args.domain_id)
+    except (ParameterError, ScenarioError, OSError, NoFreeDomain) as error:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
-    env = ros_env(args.domain_id)
     print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {len(scenario.agent_ids)} agents, "
           f'{args.clock}, run dir {args.run_dir}', file=sys.stderr)
     log_dir = Path(args.run_dir) / 'logs'
