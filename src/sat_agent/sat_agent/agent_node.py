@@ -13,6 +13,9 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
 - ``cmd`` (pub, ControlCommand, STEP), ``radio/out/*`` (pub, RADIO);
 - ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder.
 
+Until its first scan the agent announces on ``/world/ready`` how many readers its writers have
+matched (sat_agent.readiness): world_sim starts once none of the run's first messages can be lost.
+
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
 seconds with what it has (a lost message must not stall it). If world_sim dies, the agent
@@ -41,6 +44,7 @@ from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurem
 from sat_agent.node_runner import finish_run, run_nodes
 from sat_agent.qos import RADIO, STEP
 from sat_agent.radio_parsing import RadioParser
+from sat_agent.readiness import ReadyAnnouncer
 from sat_agent.ros_params import declare_required_int, declare_sat_params
 from sat_agent.search_density import Lattice
 from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet
@@ -86,11 +90,15 @@ class AgentNode(Node):
         self.status_pub = self.create_publisher(AgentStatus, 'status', STEP)
         self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO)
                            for kind, cls in RADIO_TYPES.items()}
-        self.create_subscription(MeasurementSet, 'measurements', self.on_measurements, STEP)
+        inputs = [self.create_subscription(MeasurementSet, 'measurements', self.on_measurements,
+                                           STEP)]
         for kind, cls in RADIO_TYPES.items():
-            self.create_subscription(cls, f'radio/in/{kind}',
-                                     lambda data, kind=kind: self.on_radio(kind, data), RADIO,
-                                     raw=True)
+            inputs.append(self.create_subscription(
+                cls, f'radio/in/{kind}', lambda data, kind=kind: self.on_radio(kind, data), RADIO,
+                raw=True))
+        # world_sim starts step 1 once these writers have matched every reader of the run.
+        self.ready = ReadyAnnouncer(self, inputs, [self.cmd_pub, self.status_pub,
+                                                   *self.radio_pubs.values()])
         self.create_timer(0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
 
@@ -112,6 +120,7 @@ class AgentNode(Node):
             self.guard.drop(error.reason, f'scan of step {msg.step}: {error.detail}')
             return
         self.guard.accept('measurements')
+        self.ready.stop()
         self._last_scan_at = time.monotonic()
         if self._pending is not None:
             # The world moved on without our command (we were too slow): step the newest scan.

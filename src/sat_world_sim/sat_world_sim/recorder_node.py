@@ -19,10 +19,11 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
 from sat_agent.node_runner import finish_run, run_nodes
+from sat_agent.readiness import ReadyAnnouncer
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.observer import declare_run, ReadyAnnouncer
+from sat_world_sim.observer import declare_run
 from sat_world_sim.replay_support import message_class, topic_qos
 from sat_world_sim.topics import graph_topics
 
