@@ -17,6 +17,7 @@ import time
 
 from ament_index_python.packages import get_package_prefix
 import rclpy
+from rclpy.signals import SignalHandlerOptions
 import yaml
 
 from sat_world_sim.bringup import stop_group
@@ -27,6 +28,8 @@ SCALE_VARIABLE = 'SAT_TEST_TIMEOUT_SCALE'
 SPIN_S = 0.05
 # What a process gets to exit cleanly on SIGINT before it is killed (started()).
 STOP_GRACE_S = 10.0
+# What the bring-up gets to stop its processes (one after the other) on SIGINT.
+BRINGUP_STOP_S = 60.0
 # Runs whose subject is not an agent's failure: an agent is marked inactive only if it is silent
 # this long, so a slow step on a loaded machine cannot change the run (run_swarm()).
 PATIENT_AGENT_TIMEOUT_S = 60.0
@@ -116,6 +119,37 @@ def wait_for_text(path: Path, text: str, timeout: float, what: str, processes=()
         time.sleep(SPIN_S)
 
 
+@contextmanager
+def ros_node(name: str):
+    """Yield a node of the test process; rclpy is initialised without its signal handlers.
+
+    rclpy's handlers take Ctrl-C and SIGTERM to shut rclpy down and nothing more: pytest would
+    go on, and on being killed leave the processes of started() running.
+    """
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+    node = rclpy.create_node(name)
+    try:
+        yield node
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+@contextmanager
+def bringup(command):
+    """Run the bring-up (`swarm`) with piped output; stop it and all its processes after.
+
+    SIGINT makes the bring-up stop every process of the run (they run in their own sessions, so
+    killing the bring-up alone would leave them running).
+    """
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    try:
+        yield process
+    finally:
+        stop_group(process, grace=scaled(BRINGUP_STOP_S))
+
+
 def announce(node, subscriptions, publishers=()):
     """Take part in world_sim's start-up handshake (sat_agent.readiness) as a test node.
 
@@ -166,10 +200,10 @@ def run_swarm(run_dir: Path, scenario: Path, *extra, timeout: float = 600.0,
                '--params', str(params), '--run-dir', str(run_dir),
                '--domain-id', os.environ['ROS_DOMAIN_ID'], '--timeout', str(scaled(timeout)),
                *extra]
-    # The bring-up stops its processes after its own --timeout; this bound only catches a hung
-    # bring-up.
-    result = subprocess.run(command, capture_output=True, text=True,
-                            timeout=scaled(timeout) + scaled(4 * STOP_GRACE_S))
+    with bringup(command) as swarm:
+        # The bring-up stops its processes after its own --timeout; this bound only catches a
+        # hung bring-up.
+        out, err = swarm.communicate(timeout=scaled(timeout) + scaled(BRINGUP_STOP_S))
     metrics_path = run_dir / 'metrics.json'
     metrics = json.loads(metrics_path.read_text()) if metrics_path.is_file() else None
-    return result.returncode, metrics, result.stdout + result.stderr
+    return swarm.returncode, metrics, out + err

@@ -7,9 +7,8 @@ import subprocess
 import time
 
 import pytest
-import rclpy
-from ros_harness import (announce, executable, PARAMS, REPO, run_swarm, scaled, spin_until,
-                         started, wait_matched)
+from ros_harness import (announce, bringup, executable, PARAMS, REPO, ros_node, run_swarm,
+                         scaled, spin_until, started, wait_matched)
 
 from sat_agent.qos import STEP, WORLD
 from sat_msgs.msg import ControlCommand, MeasurementSet, WorldStep
@@ -35,25 +34,15 @@ def test_kill_and_respawn_under_radio_loss_completes_the_run(tmp_path):
                '--params', str(PARAMS), '--run-dir', str(run_dir), '--steps', str(STEPS),
                '--respawn', '--radio-loss', '0.3', '--agent-timeout', '3', '--quiet',
                '--domain-id', os.environ['ROS_DOMAIN_ID'], '--timeout', str(scaled(480))]
-    rclpy.init()
-    node = rclpy.create_node('fault_injector')
     steps = []
-    node.create_subscription(WorldStep, '/world/step', lambda m: steps.append(m.step), WORLD)
-    swarm = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             start_new_session=True)
-    try:
+    with ros_node('fault_injector') as node, bringup(command) as swarm:
+        node.create_subscription(WorldStep, '/world/step', lambda m: steps.append(m.step), WORLD)
         spin_until(node, lambda: steps and steps[-1] >= KILL_AT, 180,
                    f'/world/step reaching step {KILL_AT}', (swarm,))
         victim = agent_pid(swarm.pid, 2)
         assert victim is not None, 'no agent_2 process under the bring-up'
         os.kill(victim, signal.SIGKILL)
         out, err = swarm.communicate(timeout=scaled(480))
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-        if swarm.poll() is None:
-            os.killpg(swarm.pid, signal.SIGKILL)
-            swarm.wait()
     assert swarm.returncode == 0, err[-3000:]
     assert out.strip().splitlines()[-1] == str(run_dir)
     assert 'agent_2 exited (-9): respawn 1' in err
@@ -100,16 +89,14 @@ def test_agents_hold_then_exit_cleanly_when_world_sim_dies(tmp_path):
              '-p', f'world_timeout:={world_timeout}']
     other = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_2',
              '--params-file', str(PARAMS), '-p', 'agent_id:=2']
-    rclpy.init()
-    node = rclpy.create_node('world_killer')
     commands = []
-    watch = node.create_subscription(ControlCommand, '/agent_1/cmd', commands.append, STEP)
-    # The test plays the world once after world_sim died: one scan, to which agent 1 must
-    # answer once (it resumes when scans come again).
-    scan = node.create_publisher(MeasurementSet, '/agent_1/measurements', STEP)
-    # world_sim waits for this watcher: a lock-step run can outpace a late-matched reader.
-    announce(node, [watch])
-    try:
+    with ros_node('world_killer') as node:
+        watch = node.create_subscription(ControlCommand, '/agent_1/cmd', commands.append, STEP)
+        # The test plays the world once after world_sim died: one scan, to which agent 1 must
+        # answer once (it resumes when scans come again).
+        scan = node.create_publisher(MeasurementSet, '/agent_1/measurements', STEP)
+        # world_sim waits for this watcher: a lock-step run can outpace a late-matched reader.
+        announce(node, [watch])
         with started(agent, tmp_path / 'agent_1.log') as a1, \
                 started(other, tmp_path / 'agent_2.log') as a2, \
                 started(world, tmp_path / 'world.log') as w:
@@ -128,9 +115,6 @@ def test_agents_hold_then_exit_cleanly_when_world_sim_dies(tmp_path):
             gone = time.monotonic() - sent_at
             log = (tmp_path / 'agent_1.log').read_text()
             assert a1.returncode == 0, log[-2000:]
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
     assert 'world_sim is gone, exiting' in log
     # It waited world_timeout after its last scan (received after sent_at), and not much more.
     assert world_timeout <= gone <= world_timeout + scaled(10)

@@ -14,8 +14,7 @@ from geometry_msgs.msg import Point
 from hypothesis import given, HealthCheck, Phase, settings, strategies as st
 import numpy as np
 import pytest
-import rclpy
-from ros_harness import executable, PARAMS, spin_until, started, wait_matched
+from ros_harness import executable, PARAMS, ros_node, spin_until, started, wait_matched
 
 from sat_agent.density_codec import encode_density
 from sat_msgs.msg import (AgentMode, MeasurementSet, MultiTargetEstimate, RangeBearing,
@@ -179,18 +178,14 @@ def fuzz(tmp_path_factory):
     command = [executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{AGENT}',
                '--params-file', str(PARAMS), '-p', f'agent_id:={AGENT}',
                '-p', 'diagnostics_period:=0.1']
-    rclpy.init()
-    node = rclpy.create_node('fuzzer')
-    fuzzer = Fuzzer(node)
-    with started(command, log) as agent:
+    with ros_node('fuzzer') as node, started(command, log) as agent:
+        fuzzer = Fuzzer(node)
         # What is published before a writer matched the agent's reader never reaches it.
         wait_matched(node, fuzzer.pubs.values(), 60, "the test's writers matching the agent")
         fuzzer.agent = agent
         fuzzer.sent = {'valid': 0, 'invalid': {}}
         fuzzer.batches = 0
         yield fuzzer
-    node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def send_and_count(fuzz, items, rng):

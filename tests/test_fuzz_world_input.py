@@ -16,8 +16,8 @@ from geometry_msgs.msg import Point
 from hypothesis import given, HealthCheck, Phase, settings, strategies as st
 import numpy as np
 import pytest
-import rclpy
-from ros_harness import announce, executable, PARAMS, spin_until, started, write_scenario
+from ros_harness import (announce, executable, PARAMS, ros_node, spin_until, started,
+                         write_scenario)
 
 from sat_agent.density_codec import encode_density
 from sat_agent.qos import RADIO, STEP
@@ -126,16 +126,12 @@ def world(tmp_path_factory):
     command = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
                str(PARAMS), '-p', f'scenario:={scenario}', '-p', 'observers:=0',
                '-p', 'diagnostics_period:=0.1', '-p', 'agent_timeout:=120.0']
-    rclpy.init()
-    node = rclpy.create_node('world_fuzzer')
-    agents = ScriptedAgents(node)
-    with started(command, tmp / 'world_sim.log') as process:
+    with ros_node('world_fuzzer') as node, started(command, tmp / 'world_sim.log') as process:
+        agents = ScriptedAgents(node)
         agents.process = process
         agents.step = 1
         agents.sent = {}
         yield agents
-    node.destroy_node()
-    rclpy.try_shutdown()
 
 
 def dropped(counters):

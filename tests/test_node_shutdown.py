@@ -6,8 +6,7 @@ import sys
 
 from diagnostic_msgs.msg import DiagnosticArray
 import pytest
-import rclpy
-from ros_harness import executable, PARAMS, scaled, spin_until, started, wait_exit
+from ros_harness import executable, PARAMS, ros_node, scaled, spin_until, started, wait_exit
 
 
 @pytest.mark.ros
@@ -20,21 +19,14 @@ def test_an_agent_stopped_by_a_signal_exits_0_without_an_error(tmp_path, number)
     log = tmp_path / 'agent.log'
     command = [executable('sat_agent', 'agent'), '--ros-args', '--params-file', str(PARAMS),
                '-r', '__ns:=/agent_9', '-p', 'agent_id:=9', '-p', 'diagnostics_period:=0.05']
-    rclpy.init()
-    node = rclpy.create_node('signal_sender')
     spinning = []
-    # The agent's diagnostics timer has fired: its executor is spinning its callbacks.
-    node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: spinning.extend(
-        s.name for s in m.status if s.name.startswith('/agent_9/')), 10)
-    try:
-        with started(command, log) as agent:
-            spin_until(node, lambda: spinning, 60, "agent 9's first /diagnostics", (agent,))
-            agent.send_signal(number)
-            assert wait_exit(agent, 10, f'agent 9 exiting on {number.name}') == 0, \
-                log.read_text()
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    with ros_node('signal_sender') as node, started(command, log) as agent:
+        # The agent's diagnostics timer has fired: its executor is spinning its callbacks.
+        node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: spinning.extend(
+            s.name for s in m.status if s.name.startswith('/agent_9/')), 10)
+        spin_until(node, lambda: spinning, 60, "agent 9's first /diagnostics", (agent,))
+        agent.send_signal(number)
+        assert wait_exit(agent, 10, f'agent 9 exiting on {number.name}') == 0, log.read_text()
     output = log.read_text(encoding='utf-8')
     assert 'FATAL' not in output and 'Traceback' not in output, output
 

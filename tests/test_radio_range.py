@@ -9,9 +9,9 @@ from array import array
 
 import numpy as np
 import pytest
-import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from ros_harness import announce, executable, PARAMS, spin_until, started, write_scenario
+from ros_harness import (announce, executable, PARAMS, ros_node, spin_until, started,
+                         write_scenario)
 
 from sat_agent.config import SatParams
 from sat_agent.density_codec import encode_density
@@ -101,19 +101,14 @@ def test_reports_flow_exactly_while_agents_are_within_range(tmp_path):
                                       {'id': 2, 'start': [90.0, 50.0]}])
     command = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
                str(PARAMS), '-p', f'scenario:={scenario}', '-p', 'observers:=0']
-    rclpy.init()
-    node = rclpy.create_node('scripted_agents')
-    agents = ScriptedAgents(node)
-    try:
+    with ros_node('scripted_agents') as node:
+        agents = ScriptedAgents(node)
         with started(command, tmp_path / 'world_sim.log') as world:
             # Truth and forwards come on other topics than /world/step: wait until every
             # message the world sent is in.
             spin_until(node, agents.all_in, 120,
                        'the run finishing with every truth and forwarded report received',
                        (world,))
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
     comm_range = SatParams().cooperation.comm_range
     in_range = {k for k, poses in agents.truth.items()
                 if np.hypot(*(poses[1] - poses[2])) <= comm_range}

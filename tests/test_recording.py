@@ -5,8 +5,7 @@ import subprocess
 import sys
 
 import pytest
-import rclpy
-from ros_harness import executable, scaled, spin_until
+from ros_harness import executable, ros_node, scaled, spin_until
 from rosbags.rosbag2 import Reader
 
 from sat_world_sim.bag_replay import deep
@@ -77,10 +76,8 @@ def test_republishing_the_bag_delivers_every_message(paper_run):
     bag = run_dir / 'bag'
     with Reader(bag) as reader:
         in_bag = Counter(c.topic for c, _, _ in reader.messages())
-    rclpy.init()
-    node = rclpy.create_node('replay_listener')
     got = Counter()
-    try:
+    with ros_node('replay_listener') as node:
         for topic in graph_topics((1, 2)):
             node.create_subscription(message_class(topic.msgtype), topic.name,
                                      lambda _, name=topic.name: got.update([name]),
@@ -103,9 +100,6 @@ def test_republishing_the_bag_delivers_every_message(paper_run):
             if replay.poll() is None:
                 replay.kill()
                 replay.communicate()
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
     assert got == in_bag
 
 

@@ -11,10 +11,9 @@ import time
 
 import numpy as np
 import pytest
-import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from ros_harness import (announce, executable, PARAMS, REPO, run_swarm, scaled, spin_until,
-                         started, wait_exit, write_scenario)
+from ros_harness import (announce, executable, PARAMS, REPO, ros_node, run_swarm, scaled,
+                         spin_until, started, wait_exit, write_scenario)
 
 from sat_agent.config import load_params_file
 from sat_msgs.msg import AgentStatus, GroundTruth, SearchDensity, WorldStep
@@ -73,28 +72,25 @@ class Observer:
 
 
 @pytest.fixture
-def ros_node():
-    rclpy.init()
-    node = rclpy.create_node('swarm_test_observer')
-    yield node
-    node.destroy_node()
-    rclpy.try_shutdown()
+def watcher():
+    with ros_node('swarm_test_observer') as node:
+        yield node
 
 
 @pytest.mark.timeout(240)
-def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, ros_node):
-    observer = Observer(ros_node, (1, 2))
+def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, watcher):
+    observer = Observer(watcher, (1, 2))
     world = world_command(PAPER, 'steps:=60', 'observers:=1')
     with started(world, tmp_path / 'world.log') as w, \
             started(agent_command(1), tmp_path / 'a1.log') as a1, \
             started(agent_command(2), tmp_path / 'a2.log') as a2:
-        spin_until(ros_node, lambda: observer.finished, 180, 'the 60-step run finishing',
+        spin_until(watcher, lambda: observer.finished, 180, 'the 60-step run finishing',
                    (w, a1, a2))
         # Other topics than /world/step: their last step may come after it. Each writer
         # delivers in order, so its step 60 comes after all its earlier ones.
         last = [(i, 60) for i in (1, 2)]
-        spin_until(ros_node, lambda: all(k in observer.status and k in observer.density
-                                         for k in last),
+        spin_until(watcher,
+                   lambda: all(k in observer.status and k in observer.density for k in last),
                    30, "both agents' status and density of step 60", (a1, a2))
     joint = sorted(k for k in range(1, 61)
                    if all(list(observer.status[(i, k)].group) == [1, 2] for i in (1, 2)))
@@ -228,8 +224,8 @@ def test_two_trackers_on_the_same_target_end_with_one_tracking(tmp_path):
 
 
 @pytest.mark.timeout(300)
-def test_a_killed_agent_stalls_the_world_at_most_the_timeout(tmp_path, ros_node):
-    observer = Observer(ros_node, ())
+def test_a_killed_agent_stalls_the_world_at_most_the_timeout(tmp_path, watcher):
+    observer = Observer(watcher, ())
     timeout = 3.0
     steps = 80
     run_dir = tmp_path / 'run'
@@ -240,11 +236,11 @@ def test_a_killed_agent_stalls_the_world_at_most_the_timeout(tmp_path, ros_node)
             started(metrics, tmp_path / 'metrics.log') as m, \
             started(agent_command(1), tmp_path / 'a1.log'), \
             started(agent_command(2), tmp_path / 'a2.log') as a2:
-        spin_until(ros_node, lambda: observer.steps and observer.steps[-1][1] >= 30, 120,
+        spin_until(watcher, lambda: observer.steps and observer.steps[-1][1] >= 30, 120,
                    '/world/step reaching step 30', (w, m))
         os.kill(a2.pid, signal.SIGKILL)
         a2.wait()
-        spin_until(ros_node, lambda: observer.finished and steps in observer.truth, 120,
+        spin_until(watcher, lambda: observer.finished and steps in observer.truth, 120,
                    'the run finishing', (w, m))
         assert wait_exit(m, 30, 'metrics writing metrics.json') == 0, \
             (tmp_path / 'metrics.log').read_text()[-3000:]
