@@ -7,8 +7,11 @@ user's are), with pytest's JUnit XML report of that run. With ``--load``, two bu
 hunt; they are stopped, by pid, when the hunt ends however it ends.
 
 Prints each run's wall time and outcome, then each failing test with how many runs it failed in
-and the tail of its failure text and captured output. Files: ``<out>/run-<i>.log`` (the run's
-output) and ``<out>/run-<i>.xml``. Exit code 0 only if every run passed.
+and the tail of its failure text and captured output, then the warnings and errors the nodes
+logged over all runs, by kind: a bound that was reached without failing a test shows there
+(near misses). Files: ``<out>/run-<i>.log`` (the run's output), ``<out>/run-<i>.xml`` and, for
+failed runs (all with --keep-tmp), ``<out>/run-<i>-tmp`` (pytest's temp dir with the nodes'
+logs). Exit code 0 only if every run passed.
 
     scripts/flake_hunt.py --runs 10
     scripts/flake_hunt.py --runs 5 --load --out /tmp/hunt
@@ -16,10 +19,12 @@ output) and ``<out>/run-<i>.xml``. Exit code 0 only if every run passed.
 """
 
 import argparse
-from collections import defaultdict
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 import os
 from pathlib import Path
+import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -30,6 +35,8 @@ import xml.etree.ElementTree as ElementTree
 
 REPO = Path(__file__).resolve().parents[1]
 BUSY_LOOP = 'while True: pass'
+# rclpy's log lines: [WARN] [1764245000.123456789] [world_sim]: step 12: ...
+NODE_PROBLEM = re.compile(r'^\[(WARN|ERROR|FATAL)\] \[[0-9.]+\] (.*)$')
 
 
 @dataclass
@@ -41,6 +48,7 @@ class Run:
     code: int
     tests: int = 0
     failures: Dict[str, str] = field(default_factory=dict)   # test id -> failure text
+    node_problems: Counter = field(default_factory=Counter)    # kind of log line -> count
 
 
 def parse_junit(path: Path) -> tuple:
@@ -65,6 +73,17 @@ def _captured(text) -> bool:
     return any(line.strip() and not line.startswith('---') for line in (text or '').splitlines())
 
 
+def node_problems(tmp: Path) -> Counter:
+    """Count the warnings and errors in the nodes' logs under tmp, numbers blanked out."""
+    kinds = Counter()
+    for log in tmp.rglob('*.log'):
+        for line in log.read_text(encoding='utf-8', errors='replace').splitlines():
+            match = NODE_PROBLEM.match(line)
+            if match:
+                kinds[f'[{match[1]}] ' + re.sub(r'\d+(\.\d+)?', 'N', match[2])[:160]] += 1
+    return kinds
+
+
 def busy_processes(count: int) -> List[subprocess.Popen]:
     """Start count CPU-bound processes in their own sessions (stopped by stop())."""
     return [subprocess.Popen([sys.executable, '-c', BUSY_LOOP], start_new_session=True)
@@ -79,10 +98,11 @@ def stop(processes: List[subprocess.Popen]):
         process.wait()
 
 
-def run_suite(index: int, out: Path, pytest_args: str) -> Run:
+def run_suite(index: int, out: Path, pytest_args: str, keep_tmp: bool) -> Run:
     """Run `make test` once; its output goes to out/run-<index>.log."""
     xml = out / f'run-{index}.xml'
-    args = f'--junitxml={xml} -o junit_logging=all {pytest_args}'.strip()
+    tmp = out / f'run-{index}-tmp'
+    args = f'--junitxml={xml} -o junit_logging=all --basetemp={tmp} {pytest_args}'.strip()
     log = out / f'run-{index}.log'
     started = time.monotonic()
     with open(log, 'w', encoding='utf-8') as stream:
@@ -93,6 +113,10 @@ def run_suite(index: int, out: Path, pytest_args: str) -> Run:
         run.tests, run.failures = parse_junit(xml)
     elif code != 0:
         run.failures['<the suite itself>'] = log.read_text(encoding='utf-8', errors='replace')
+    if tmp.is_dir():
+        run.node_problems = node_problems(tmp)
+        if code == 0 and not keep_tmp:
+            shutil.rmtree(tmp)
     return run
 
 
@@ -110,6 +134,10 @@ def report(runs: List[Run], tail: int) -> str:
         index, text = last[name]
         lines += ['', f'FAILED {counts[name]}/{len(runs)}: {name} (last in run {index})',
                   text[-tail:]]
+    problems = sum((run.node_problems for run in runs), Counter())
+    if problems:
+        lines += ['', "Warnings and errors in the nodes' logs, all runs (fault tests cause some):"]
+        lines += [f'{count:6d}  {kind}' for kind, count in problems.most_common()]
     return '\n'.join(lines)
 
 
@@ -124,6 +152,8 @@ def main(argv=None) -> int:
                         help='more pytest arguments, one string (e.g. "-k fuzz")')
     parser.add_argument('--tail', type=int, default=3000,
                         help='characters of each failure text to print (default 3000)')
+    parser.add_argument('--keep-tmp', action='store_true',
+                        help="keep every run's pytest temp dir (default: failed runs' only)")
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error(f'--runs = {args.runs}: must be >= 1')
@@ -135,7 +165,7 @@ def main(argv=None) -> int:
     runs = []
     try:
         for index in range(1, args.runs + 1):
-            run = run_suite(index, out, args.pytest_args)
+            run = run_suite(index, out, args.pytest_args, args.keep_tmp)
             runs.append(run)
             outcome = 'passed' if run.code == 0 else \
                 f'FAILED (exit {run.code}): {", ".join(sorted(run.failures)) or "see the log"}'
