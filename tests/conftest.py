@@ -7,6 +7,7 @@ import os
 from pathlib import Path
 import sys
 
+from hypothesis import HealthCheck, settings
 import pytest
 
 from sat_world_sim.domain_ids import claim_domain_id
@@ -26,6 +27,15 @@ REPO_ROOT = TESTS_DIR.parent
 os.environ.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(REPO_ROOT / 'config' / 'fastdds.xml'))
 # Test helpers (msg_samples, peers) live beside the tests.
 sys.path.insert(0, str(TESTS_DIR))
+
+# Hypothesis: the suite draws the same examples every run (a red run is the code's, never the
+# draw's), with no per-example deadline and no data-generation speed check: both are wall-clock
+# guesses a loaded machine breaks (speed lives in benchmarks). `--hypothesis-profile=explore`
+# draws new examples each run.
+settings.register_profile('suite', derandomize=True, database=None, deadline=None,
+                          suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile('explore', deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile('suite')
 
 
 def pytest_report_header(config):

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 from conftest import TESTS_DIR
+import pytest
 from ros_harness import scaled
 
 INNER = '''
@@ -48,3 +49,10 @@ def test_a_scale_that_is_not_a_positive_number_is_refused_by_name(tmp_path):
 def test_failed_tests_are_never_rerun(pytestconfig):
     # pytest-rerunfailures comes with colcon-core; pytest.ini keeps it out of this suite.
     assert not pytestconfig.pluginmanager.has_plugin('rerunfailures')
+
+
+def test_hypothesis_draws_the_same_examples_every_run_without_deadlines(pytestconfig):
+    from hypothesis import settings
+    if pytestconfig.getoption('hypothesis_profile', None) not in (None, 'suite'):
+        pytest.skip('another Hypothesis profile was chosen for this session')
+    assert settings.default.derandomize and settings.default.deadline is None
