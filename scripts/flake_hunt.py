@@ -74,13 +74,19 @@ def _captured(text) -> bool:
 
 
 def node_problems(tmp: Path) -> Counter:
-    """Count the warnings and errors in the nodes' logs under tmp, numbers blanked out."""
+    """Count the warnings and errors in the nodes' logs under tmp by test and kind.
+
+    A kind is the line with its numbers blanked out; the test is the temp dir pytest made for
+    it (its name cut to 30 characters, as pytest does).
+    """
     kinds = Counter()
     for log in tmp.rglob('*.log'):
+        test = re.sub(r'\d+$', '', log.relative_to(tmp).parts[0])
         for line in log.read_text(encoding='utf-8', errors='replace').splitlines():
             match = NODE_PROBLEM.match(line)
             if match:
-                kinds[f'[{match[1]}] ' + re.sub(r'\d+(\.\d+)?', 'N', match[2])[:160]] += 1
+                kind = re.sub(r'\d+(\.\d+)?', 'N', match[2])[:140]
+                kinds[f'{test}: [{match[1]}] {kind}'] += 1
     return kinds
 
 
@@ -136,8 +142,9 @@ def report(runs: List[Run], tail: int) -> str:
                   text[-tail:]]
     problems = sum((run.node_problems for run in runs), Counter())
     if problems:
-        lines += ['', "Warnings and errors in the nodes' logs, all runs (fault tests cause some):"]
-        lines += [f'{count:6d}  {kind}' for kind, count in problems.most_common()]
+        lines += ['', "Warnings and errors in the nodes' logs, all runs, by test (the fault and "
+                  'fuzz tests cause theirs):']
+        lines += [f'{count:6d}  {kind}' for kind, count in sorted(problems.items())]
     return '\n'.join(lines)
 
 
