@@ -151,12 +151,12 @@ def bringup(command):
 
 
 def announce(node, subscriptions, publishers=()):
-    """Take part in world_sim's start-up handshake (sat_agent.readiness) as a test node.
+    """Take part in world_sim's start-up handshake (sat_agent.ros.readiness) as a test node.
 
     A test node that plays agents passes their writers, one that watches the run its
     subscriptions; world_sim counts a node that writes no agent's commands as an observer.
     """
-    from sat_agent.readiness import ReadyAnnouncer
+    from sat_agent.ros.readiness import ReadyAnnouncer
     return ReadyAnnouncer(node, subscriptions, publishers)
 
 

@@ -10,7 +10,7 @@ import pytest
 from ros_harness import (announce, bringup, executable, PARAMS, REPO, ros_node, run_swarm,
                          scaled, spin_until, started, wait_matched)
 
-from sat_agent.qos import STEP, WORLD
+from sat_agent.ros.qos import STEP, WORLD
 from sat_msgs.msg import ControlCommand, MeasurementSet, WorldStep
 
 pytestmark = pytest.mark.ros

@@ -20,7 +20,7 @@ from ros_harness import (announce, executable, PARAMS, ros_node, spin_until, sta
                          write_scenario)
 
 from sat_agent.density_codec import encode_density
-from sat_agent.qos import RADIO, STEP
+from sat_agent.ros.qos import RADIO, STEP
 from sat_msgs.msg import (AgentMode, ControlCommand, MeasurementSet, MultiTargetEstimate,
                           SearchDensity, TargetEstimate)
 from sat_world_sim.records import density_values

@@ -1,8 +1,8 @@
-"""The start-up handshake's rule (sat_agent.readiness.unmet), without a graph."""
+"""The start-up handshake's rule (sat_agent.ros.readiness.unmet), without a graph."""
 
 import json
 
-from sat_agent.readiness import announcement, unmet
+from sat_agent.ros.readiness import announcement, unmet
 
 WORLD_READS = ['/agent_1/cmd', '/agent_1/radio/out/mode']
 WORLD_WRITES = {'/agent_1/measurements': 2, '/world/step': 1}

@@ -71,7 +71,7 @@ def _check(key: str, value: Any, low: float, high: float, *, low_open=False, hig
 
 
 INF = math.inf
-SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk')
+SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk', 'phd_voronoi', 'thompson')
 SEARCH_PLANNERS = ('greedy', 'ortools')
 
 
@@ -257,9 +257,11 @@ class SearchParams:
     # tentative peak: enough for confirm_scans more scans from a stand-off, short enough to keep
     # the search going.
     investigate_steps: int = 4
-    # How a searching agent moves: 'sat' is the paper's (closed walks over the search map,
-    # joint plans in range); 'lawnmower' and 'random_walk' are the evaluation's baselines
-    # (search_baselines.py). The filter, tracking and mode machine are the same for all.
+    # How the agent moves: 'sat' is the paper's (closed walks over the search map, joint plans
+    # in range); the others are the evaluation's baselines (sat_agent/baselines/):
+    # 'lawnmower' and 'random_walk' replace the search moves only, 'phd_voronoi' (Dames 2020)
+    # and 'thompson' (DecSTER, Banerjee and Schneider 2024) the whole controller. The filter,
+    # extraction and mode machine are the same for all.
     policy: str = 'sat'
     # How the 'sat' closed walks are made: 'greedy' is the paper's path-cheapest-arc;
     # 'ortools' improves the greedy walks by OR-Tools local search (routing.py).

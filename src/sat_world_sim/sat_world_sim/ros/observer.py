@@ -1,15 +1,15 @@
 """What the observer nodes (metrics, recorder, logger) share: their parameters and what they read.
 
 Each observer announces itself once all its subscriptions have a publisher
-(sat_agent.readiness.ReadyAnnouncer); world_sim waits for ``observers`` of them, and for the
-writers of what they read to have matched them, before step 1, so no observer misses the run's
-first messages.
+(sat_agent.ros.readiness.ReadyAnnouncer); world_sim waits for ``observers`` of them, and for
+the writers of what they read to have matched them, before step 1, so no observer misses the
+run's first messages.
 """
 
 from pathlib import Path
 
-from sat_agent.qos import RADIO, STEP, WORLD
-from sat_agent.readiness import ReadyAnnouncer
+from sat_agent.ros.qos import RADIO, STEP, WORLD
+from sat_agent.ros.readiness import ReadyAnnouncer
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
 

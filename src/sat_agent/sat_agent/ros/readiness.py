@@ -28,6 +28,8 @@ from typing import Iterable, List, Mapping
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
+from sat_agent.ros.node_runner import steady_timer
+
 TOPIC = '/world/ready'
 # Latched: world_sim started after a node still reads that node's last announcements. Each
 # node's writer keeps its own history, so the depth counts one node's announcements.
@@ -89,7 +91,7 @@ class ReadyAnnouncer:
         self._publishers = list(publishers)
         self._announced = None
         self._publisher = node.create_publisher(String, TOPIC, QOS)
-        self._timer = node.create_timer(period, self._check)
+        self._timer = steady_timer(node, period, self._check)
 
     def _check(self):
         if not all(s.get_publisher_count() > 0 for s in self._subscriptions):

@@ -23,13 +23,14 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.readiness import ReadyAnnouncer
+from sat_agent.ros.msg_conversions import message_class
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.readiness import ReadyAnnouncer
 from sat_msgs.msg import GroundTruth, WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.observer import declare_run
-from sat_world_sim.replay_support import message_class, topic_qos
+from sat_world_sim.ros.observer import declare_run
+from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics, Topic
 
 # After the world's final step, wait at most this long for the run's last messages.
@@ -77,7 +78,7 @@ class RecorderNode(Node):
                 message_class(topic.msgtype), topic.name,
                 lambda data, c=connection, t=topic: self._write(c, t, data), qos, raw=True))
         self.ready = ReadyAnnouncer(self, subscriptions)
-        self.create_timer(0.2, self._tick)
+        steady_timer(self, 0.2, self._tick)
 
     def _write(self, connection, topic: Topic, data: bytes):
         self.writer.write(connection, time.time_ns(), data)
