@@ -10,9 +10,9 @@ soak: ~0.4 GB per 1,000 steps uncompressed, 14 MB compressed).
 The node closes the bag and exits after the world's final step once the run's last messages are
 in (or after FINAL_WAIT_S), or on Ctrl-C. DDS does not order messages across topics, so the
 final WorldStep can come before the last step's other messages: the run's last messages are in
-when each agent active at the final step has sent its scan's answers (cmd, status, radio/out)
-of that step, and world_sim has exited, which it does only once every reader acknowledged its
-messages (so they are all in this node's queues).
+when each agent active at the final step has sent its scan's answers (cmd, robot/goal, status,
+radio/out) of that step (by their headers' sim time), and world_sim has exited, which it does
+only once every reader acknowledged its messages (so they are all in this node's queues).
 """
 
 import time
@@ -26,6 +26,7 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, W
 from sat_agent.ros.msg_conversions import message_class
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.readiness import ReadyAnnouncer
+from sat_agent.topic_names import ROBOT_GOAL
 from sat_msgs.msg import GroundTruth, WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
@@ -36,7 +37,8 @@ from sat_world_sim.topics import graph_topics, Topic
 # After the world's final step, wait at most this long for the run's last messages.
 FINAL_WAIT_S = 10.0
 # An active agent's answers to a scan: the messages of the final step the bag must hold.
-ANSWERS = ('cmd', 'status', 'radio/out/search_density', 'radio/out/estimate', 'radio/out/mode')
+ANSWERS = ('cmd', ROBOT_GOAL[0], 'status', 'radio/out/search_density', 'radio/out/estimate',
+           'radio/out/mode')
 
 
 def bag_qos(profile) -> Qos:
@@ -87,23 +89,27 @@ class RecorderNode(Node):
         if topic.name == '/world/step' and deserialize_message(data, WorldStep).finished:
             self._finished_at = time.monotonic()
 
-    def _last_step(self, name: str) -> int:
-        """Return the step of the last message recorded on a topic, -1 before any."""
+    def _last_stamp(self, name: str) -> int:
+        """Return the header stamp (ns of sim time) of the last message on a topic, -1 before any.
+
+        Every message of step k carries t_k (sat_agent.stamps), the standard-typed ones too.
+        """
         if name not in self._last:
             return -1
         topic, data = self._last[name]
-        return int(deserialize_message(data, message_class(topic.msgtype)).step)
+        stamp = deserialize_message(data, message_class(topic.msgtype)).header.stamp
+        return stamp.sec * 10**9 + stamp.nanosec
 
     def _all_in(self) -> bool:
         """Whether the run's last messages are in (module docstring)."""
         if self.count_publishers('/world/step') > 0:
             return False
-        final = self._last_step('/world/step')
-        if self._last_step('/world/truth') != final:
+        final = self._last_stamp('/world/step')
+        if self._last_stamp('/world/truth') != final:
             return False
         truth = deserialize_message(self._last['/world/truth'][1], GroundTruth)
         active = [a.id for a in truth.agents if a.active and a.id in self._agent_ids]
-        return all(self._last_step(f'/agent_{i}/{name}') >= final
+        return all(self._last_stamp(f'/agent_{i}/{name}') >= final
                    for i in active for name in ANSWERS)
 
     def _tick(self):

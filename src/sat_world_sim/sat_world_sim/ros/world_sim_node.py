@@ -44,7 +44,6 @@ import time
 from ament_index_python.packages import get_package_share_directory
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
-from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
@@ -56,7 +55,8 @@ from sat_agent.ros import readiness, views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.msg_conversions import (header, InvalidMessage, measurements_to_msg, point,
                                            RADIO_TYPES)
-from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.node_runner import (all_acked, FINAL_ACK_TIMEOUT_S, finish_run, run_nodes,
+                                       steady_timer)
 from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.ros_params import declare_node_params, declare_sat_params, WORLD_PARAMS
@@ -71,8 +71,6 @@ from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
-# After the final step, exit once every reader acknowledged the last messages, or after this.
-FINAL_ACK_TIMEOUT_S = 10.0
 
 
 def default_scenario() -> str:
@@ -170,8 +168,8 @@ class WorldSimNode(Node):
             self.ids, self.observers)
 
     def _run_publishers(self):
-        return [self.step_pub, self.truth_pub, self.traffic_pub, *self.scan_pubs.values(),
-                *self.inbox_pubs.values()]
+        return [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub,
+                *self.scan_pubs.values(), *self.inbox_pubs.values()]
 
     # -- the loop ---------------------------------------------------------------------------
 
@@ -215,11 +213,11 @@ class WorldSimNode(Node):
         self._begin_step()
 
     def _final_messages_acked(self) -> bool:
-        """Whether the world's topics and the active agents' scans and inboxes are acked."""
-        publishers = [self.step_pub, self.truth_pub, self.traffic_pub]
+        """Whether /clock, the world's topics, the active agents' scans and inboxes are acked."""
+        publishers = [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub]
         publishers += [self.scan_pubs[i] for i in self.active]
         publishers += [p for (i, _), p in self.inbox_pubs.items() if i in self.active]
-        return all(p.wait_for_all_acked(Duration(seconds=0)) for p in publishers)
+        return all_acked(publishers)
 
     def _answered(self, agent_id: int) -> bool:
         return agent_id in self._cmds and len(self._reports[agent_id]) == len(RADIO_TYPES)
