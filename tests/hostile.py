@@ -20,7 +20,6 @@ from ros_harness import executable, PARAMS, started, write_scenario
 import yaml
 
 from sat_agent.message_auth import create_key_file, Signer
-from sat_world_sim.ros.observer import ReadyAnnouncer
 
 DEPTH = 300
 RELIABLE = QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE)
@@ -55,10 +54,6 @@ class Hostile:
         if key not in self._publishers:
             self._publishers[key] = self.node.create_publisher(msg_type, topic, qos)
         return self._publishers[key].get_subscription_count() > 0
-
-    def announce(self, subscriptions, key: Optional[bytes]) -> ReadyAnnouncer:
-        """Tell world_sim the test is ready once its subscriptions matched (signed with key)."""
-        return ReadyAnnouncer(self.node, subscriptions, key)
 
     def capture(self, topic: str, msg_type, qos=RELIABLE, callback=None):
         """Keep every raw message of topic in captured[topic]; callback(data) on each."""
@@ -97,8 +92,8 @@ def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[
     """Start world_sim, the observers and agents 1 and 2 of scenario, with key_file (None: off).
 
     Yields a dict name -> Popen; world_sim waits for the observers and for the test itself
-    (Hostile.announce). extra: ROS arguments for every process. Everything is stopped at the
-    end.
+    (ros_harness.announce with the test's subscriptions). extra: ROS arguments for every
+    process. Everything is stopped at the end.
     """
     run_dir = tmp_path / 'run'
     key = ('-p', f'auth_key_file:={key_file}') if key_file else ()

@@ -18,10 +18,10 @@ from geometry_msgs.msg import Point
 from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
                      read_metrics, RELIABLE, signed_swarm)
 import pytest
-import rclpy
 from rclpy.serialization import deserialize_message, serialize_message
+from ros_harness import announce, ros_node, spin_until
 from test_attack_swarm import genuine_scan, scan_step, without_dropped
-from test_swarm_ros import inprocess_metrics, spin_until
+from test_swarm_ros import inprocess_metrics
 
 from sat_agent.message_auth import load_key, MonotonicCounter, Signer, WORLD_SENDER
 from sat_agent.topic_names import radio_topic
@@ -124,9 +124,7 @@ def attacked(tmp_path_factory):
     scenario = near_scenario(tmp_path, 4, STEPS)
     key_file = new_key(tmp_path)
     key = load_key(key_file)
-    rclpy.init()
-    node = rclpy.create_node('hostile')
-    try:
+    with ros_node('hostile') as node:
         hostile = Hostile(node)
         diagnostics = Diagnostics(node)
         density = radio_topic(2, 'out', 'search_density')
@@ -146,17 +144,12 @@ def attacked(tmp_path_factory):
                 hostile.capture('/agent_2/status', AgentStatus, RELIABLE,
                                 lambda data: attacker.on_agent_2('/agent_2/status',
                                                                  AgentStatus, data))]
-            assert spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets),
-                              60, processes.values())
-            hostile.announce(watched, key)
-            assert spin_until(node, lambda: all(processes[n].poll() is not None
-                                                for n in OBSERVERS),
-                              240, processes.values()), 'the observers did not finish'
-            spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 30)
+            spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets), 60,
+                       "the attacks' writers matched", processes.values())
+            announce(node, watched)
+            spin_until(node, lambda: all(p.poll() is not None for p in processes.values()),
+                       240, 'the attacked run ended', processes.values())
             codes = {name: p.poll() for name, p in processes.items()}
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
     return read_metrics(tmp_path), inprocess_metrics(scenario), attacker, diagnostics, codes
 
 

@@ -17,9 +17,9 @@ from geometry_msgs.msg import Point
 from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
                      read_metrics, RELIABLE, signed_swarm)
 import pytest
-import rclpy
 from rclpy.serialization import deserialize_message
-from test_swarm_ros import inprocess_metrics, spin_until
+from ros_harness import announce, ros_node, spin_until
+from test_swarm_ros import inprocess_metrics
 
 from sat_agent.message_auth import (AuthError, load_key, MessageVerifier, Signer, StepWindow,
                                     WORLD_SENDER)
@@ -99,9 +99,7 @@ def attacked(tmp_path_factory):
     key_file = new_key(tmp_path)
     key = load_key(key_file)
     sent = Counter()
-    rclpy.init()
-    node = rclpy.create_node('hostile')
-    try:
+    with ros_node('hostile') as node:
         hostile = Hostile(node)
         diagnostics = Diagnostics(node)
         watched = [
@@ -119,16 +117,12 @@ def attacked(tmp_path_factory):
                    ('/world/step', WorldStep, LATCHED)]
         with signed_swarm(tmp_path, scenario, STEPS, key_file,
                           extra=('-p', 'diagnostics_period:=0.1')) as processes:
-            assert spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets),
-                              60, processes.values())
-            hostile.announce(watched, key)
-            assert spin_until(node, lambda: processes['metrics'].poll() is not None, 180,
-                              processes.values()), 'the run did not end'
-            spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 30)
+            spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets), 60,
+                       "the attacks' writers matched", processes.values())
+            announce(node, watched)
+            spin_until(node, lambda: all(p.poll() is not None for p in processes.values()),
+                       180, 'the attacked run ended', processes.values())
             codes = {name: p.poll() for name, p in processes.items()}
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
     assert codes == dict.fromkeys(codes, 0), codes
     return read_metrics(tmp_path), inprocess_metrics(scenario), sent, diagnostics
 

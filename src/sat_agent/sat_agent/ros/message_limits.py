@@ -19,12 +19,12 @@ from sat_agent.ros.msg_conversions import MAX_DETECTIONS, MAX_TARGETS
 from sat_agent.search_density import Lattice
 from sat_agent.search_map import SearchMap
 from sat_msgs.msg import (AgentMode, AgentStatus, AgentTruth, ControlCommand, GroundTruth,
-                          MeasurementSet, MultiTargetEstimate, ObserverReady, RadioTraffic,
+                          MeasurementSet, MultiTargetEstimate, RadioTraffic,
                           RangeBearing, SearchDensity, TargetEstimate, TargetTruth, WorldStep)
 
 # Particles an agent shows the observers per step (AgentStatus): enough to see the cloud.
 STATUS_PARTICLES = 300
-# Characters of the longest string field (frame ids, scenario and node names) accepted.
+# Characters of the longest string field (frame ids, the scenario's name) accepted.
 MAX_NAME = 256
 # A list before the Auth block may be followed by up to 7 bytes of padding (8-alignment).
 _PADDING = 8
@@ -60,7 +60,6 @@ class MessageLimits:
     step: int
     truth: int
     traffic: int
-    observer: int
 
     @classmethod
     def compute(cls, params, agents: int) -> 'MessageLimits':
@@ -87,8 +86,7 @@ class MessageLimits:
             traffic=_size(RadioTraffic(header=_header(), link_a=[0] * pairs, link_b=[0] * pairs,
                                        sender=[0] * pairs, receiver=[0] * pairs,
                                        messages=[0] * pairs, bytes=[0] * pairs,
-                                       drop_sender=ids, dropped=[0] * agents)),
-            observer=_size(ObserverReady(name='x' * MAX_NAME)))
+                                       drop_sender=ids, dropped=[0] * agents)))
 
     def radio(self, kind: str) -> int:
         """Return the limit of a radio report kind (agent_core.REPORT_KINDS)."""

@@ -56,8 +56,9 @@ class SignedPublisher:
         self.publisher.publish(self.signer.sign(self.channel, serialize_message(msg), step,
                                                 self.relayed))
 
-    def get_subscription_count(self) -> int:
-        return self.publisher.get_subscription_count()
+    def __getattr__(self, name):
+        # The rest is the publisher's (topic_name, get_subscription_count, wait_for_all_acked).
+        return getattr(self.publisher, name)
 
 
 class VerifiedInput:

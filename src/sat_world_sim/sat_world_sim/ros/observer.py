@@ -1,11 +1,9 @@
-"""What the observer nodes (metrics, recorder, logger) share: readiness, and guarded input.
+"""What the observer nodes (metrics, recorder, logger) share: parameters and guarded input.
 
-**Readiness.** world_sim must not start step 1 before every observer receives every topic it
-needs, or the run's first messages are lost to it (DDS drops what a writer sends before a
-reader matched). So each observer checks that each of its subscriptions has matched a
-publisher, then announces its name once, signed, on the latched ``/world/observers`` topic
-(sat_msgs/ObserverReady); world_sim starts when it has heard ``observers`` distinct names (and
-every agent is matched). Unsigned, a forged announcement could start the world early.
+**Readiness.** Each observer announces itself once all its subscriptions have a publisher
+(sat_agent.ros.readiness.ReadyAnnouncer); world_sim waits for ``observers`` of them, and for
+the writers of what they read to have matched them, before step 1, so no observer misses the
+run's first messages.
 
 **Input.** Observers take every signed topic raw through signed_io.VerifiedInput, as the
 agents do: the size limit of message_limits before anything else, the signature (or, with
@@ -20,50 +18,25 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional
 
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-
 from sat_agent.agent_core import REPORT_KINDS
-from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
+from sat_agent.message_auth import StepWindow, WORLD_SENDER
 from sat_agent.ros.input_guard import InputGuard
 from sat_agent.ros.message_limits import MessageLimits
 from sat_agent.ros.msg_conversions import check_grid, InvalidMessage
-from sat_agent.ros.node_runner import steady_timer
 from sat_agent.ros.qos import DEPTH, RADIO, STEP, WORLD
-from sat_agent.ros.signed_io import declare_auth, SignedPublisher, VerifiedInput
+from sat_agent.ros.readiness import ReadyAnnouncer
+from sat_agent.ros.signed_io import declare_auth, VerifiedInput
 from sat_agent.search_density import Lattice
 from sat_agent.topic_names import radio_topic
-from sat_msgs.msg import (AgentStatus, GroundTruth, ObserverReady, RadioTraffic, SearchDensity,
-                          WorldStep)
+from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
 from sat_world_sim.topics import agent_of
 
-TOPIC = '/world/observers'
-QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
-                 durability=DurabilityPolicy.TRANSIENT_LOCAL)
 # Observers may fall up to a writer's history (qos.DEPTH steps) behind the world; a peer's
 # message is never more than a step ahead of the world's, and the world's come one step at a
 # time on each topic.
 WINDOW = StepWindow(behind=DEPTH, ahead=1, world_ahead=1)
 _WORLD_TOPICS = {'/world/step': 'step', '/world/truth': 'truth', '/world/radio': 'traffic'}
-
-
-class ReadyAnnouncer:
-    """Announce node's name on TOPIC once all the given subscriptions have a publisher.
-
-    key: the run's swarm key (None: authentication off); observers sign as the world does.
-    """
-
-    def __init__(self, node, subscriptions, key: Optional[bytes] = None, period: float = 0.1):
-        self._node = node
-        self._subscriptions = list(subscriptions)
-        self._publisher = SignedPublisher(node, ObserverReady, TOPIC, QOS,
-                                          Signer(key, WORLD_SENDER))
-        self._timer = steady_timer(node, period, self._check)
-
-    def _check(self):
-        if all(s.get_publisher_count() > 0 for s in self._subscriptions):
-            self._publisher.publish(ObserverReady(name=self._node.get_fully_qualified_name()), 0)
-            self._node.destroy_timer(self._timer)
 
 
 def declare_run(node, what: str):
@@ -104,11 +77,11 @@ def signature_of(topic: str, limits: MessageLimits) -> Optional[dict]:
 
 
 def observer_input(node, params, agent_ids):
-    """Return (VerifiedInput, MessageLimits, key) of an observer node watching these agents."""
-    key = declare_auth(node)
+    """Return (VerifiedInput, MessageLimits) of an observer node watching these agents."""
     guard = InputGuard(node, node.get_name())
-    inputs = VerifiedInput(node, guard, key, agent_ids, WINDOW, window_without_key=True)
-    return inputs, MessageLimits.compute(params, len(agent_ids)), key
+    inputs = VerifiedInput(node, guard, declare_auth(node), agent_ids, WINDOW,
+                           window_without_key=True)
+    return inputs, MessageLimits.compute(params, len(agent_ids))
 
 
 @dataclass
@@ -130,7 +103,7 @@ def watch_run(node, params, agent_ids, add) -> Watch:
     The topics are the world's step, truth and radio traffic and every agent's status and
     search density (records.route); readiness is announced once they are all matched.
     """
-    inputs, limits, key = observer_input(node, params, agent_ids)
+    inputs, limits = observer_input(node, params, agent_ids)
     lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
 
     def add_density(topic, msg):
@@ -150,4 +123,4 @@ def watch_run(node, params, agent_ids, add) -> Watch:
                                       lambda msg, topic=topic, take=take: take(topic, msg),
                                       qos, **signature_of(topic, limits))
                      for topic, cls, qos, take in topics]
-    return Watch(inputs, ReadyAnnouncer(node, subscriptions, key))
+    return Watch(inputs, ReadyAnnouncer(node, subscriptions))
