@@ -49,6 +49,8 @@ from sensor_msgs.msg import PointCloud2
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
+from sat_agent.config import SatParams
+from sat_agent.node_params import AgentNodeParams
 from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage,
@@ -58,7 +60,7 @@ from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.qos import RADIO, ROBOT, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotPose
-from sat_agent.ros.ros_params import AGENT_PARAMS, declare_node_params, declare_sat_params
+from sat_agent.ros.ros_params import NodeParameters
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_at, views_due
 from sat_agent.topic_names import (AGENT_VIEWS, ROBOT_DETECTIONS, ROBOT_GOAL, ROBOT_POSE,
@@ -72,6 +74,8 @@ MAX_STEP_JUMP = 1000
 # Reports older than this many steps are stale; younger late ones (radio latency) still add
 # their search density (Agent.step).
 MAX_REPORT_LAG = 4
+# Applied while the agent runs (``ros2 param set``); the others are read-only here.
+LIVE = ('search.investigate_steps', 'view_rate', 'report_wait_timeout', 'world_timeout')
 # Composed mode: parsed radio messages kept per agent of the process, two steps' worth of its
 # three messages (radio_parsing.py).
 PARSED_PER_AGENT = 2 * len(REPORT_KINDS)
@@ -86,15 +90,16 @@ class AgentNode(Node):
     def __init__(self, radio_parser: Optional[RadioParser] = None, **kwargs):
         super().__init__('agent', **kwargs)
         self.radio_parser = radio_parser or RadioParser()
-        self.params = declare_sat_params(self)
-        self.node_params = declare_node_params(self, AGENT_PARAMS)
+        self.parameters = NodeParameters(self, (SatParams, AgentNodeParams), LIVE, self._retune)
+        self.params, self.node_params = self.parameters.values
         self.agent_id = self.node_params.agent_id
         self.dt = self.params.motion.dt
         self._last_scan_at = None
         self.core = None
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.last_step = 0
-        self.guard = InputGuard(self, f'agent_{self.agent_id}')
+        self.guard = InputGuard(self, f'agent_{self.agent_id}',
+                                self.node_params.diagnostics_period)
         self._pending = None          # (step, (pose, measurements), deliveries, arrival time)
         self._radio = {}              # (sender, step) -> {kind: validated content}
         self._received_since_step = 0
@@ -124,6 +129,12 @@ class AgentNode(Node):
                                      raw=True)
         steady_timer(self, 0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
+
+    def _retune(self, params: SatParams, node_params: AgentNodeParams):
+        """Take a live change (LIVE): the node reads its own at each use, the core at each step."""
+        self.params, self.node_params = params, node_params
+        if self.core is not None:
+            self.core.retune(params)
 
     # -- input ------------------------------------------------------------------------------
 

@@ -7,8 +7,6 @@ once on the latched ``/world/observers`` topic; world_sim starts when it has hea
 distinct names (and every agent is matched).
 """
 
-from pathlib import Path
-
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
@@ -34,18 +32,6 @@ class ReadyAnnouncer:
         if all(s.get_publisher_count() > 0 for s in self._subscriptions):
             self._publisher.publish(String(data=self._node.get_fully_qualified_name()))
             self._node.destroy_timer(self._timer)
-
-
-def declare_run(node, what: str):
-    """Declare the observer parameters ``run_dir`` (required) and ``agent_ids``.
-
-    Returns (run_dir as a Path, agent ids as ints); what says what goes into run_dir, for the
-    error message when it is missing.
-    """
-    run_dir = node.declare_parameter('run_dir', '').value
-    if not run_dir:
-        raise ValueError(f"parameter 'run_dir' is required: {what}")
-    return Path(run_dir), [int(i) for i in node.declare_parameter('agent_ids', [1, 2]).value]
 
 
 def watch_run(node, agent_ids, add) -> ReadyAnnouncer:

@@ -10,6 +10,7 @@ soak: ~0.4 GB per 1,000 steps uncompressed, 14 MB compressed).
 The node closes the bag and exits after the world's final step, or on Ctrl-C.
 """
 
+from pathlib import Path
 import time
 
 from rclpy.node import Node
@@ -18,12 +19,14 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
+from sat_agent.node_params import ObserverParams
 from sat_agent.ros.msg_conversions import message_class
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.ros_params import NodeParameters
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.ros.observer import declare_run, ReadyAnnouncer
+from sat_world_sim.ros.observer import ReadyAnnouncer
 from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics
 
@@ -46,7 +49,8 @@ class RecorderNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('recorder', **kwargs)
-        run_dir, agent_ids = declare_run(self, 'the bag goes to <run_dir>/bag')
+        (run,) = NodeParameters(self, (ObserverParams,)).values
+        run_dir, agent_ids = Path(run.run_dir), run.agent_ids
         self.path = run_dir / 'bag'
         if self.path.exists():
             raise ValueError(f"parameter 'run_dir' = '{run_dir}': {self.path} exists already")

@@ -1,0 +1,148 @@
+"""Live parameters through rclpy's parameter service client, against running nodes.
+
+``ros2 param set`` of a read-only parameter is refused by rclpy; of a live one with a bad value,
+refused with the schema's reason (the parameter, the value, what is allowed); of a live one with
+a good value, applied: ``get`` shows it and the node behaves by it (world_sim's radio links).
+``ros2 param describe`` shows each parameter's description, range and read-only flag.
+"""
+
+import time
+
+import pytest
+import rclpy
+from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.parameter_client import AsyncParameterClient
+from ros_harness import executable, PARAMS, started, write_scenario
+
+from sat_agent.config import SatParams
+from sat_agent.node_params import AgentNodeParams
+from sat_agent.parameter_schema import leaves
+from sat_msgs.msg import RadioTraffic
+
+WAIT_S = 60.0
+
+
+def call(node, future, timeout: float = WAIT_S):
+    """Spin node until future is done; return its result."""
+    rclpy.spin_until_future_complete(node, future, timeout_sec=timeout)
+    assert future.done(), 'no answer from the parameter service'
+    return future.result()
+
+
+def set_one(node, client, name, value):
+    """Set one parameter; return its SetParametersResult."""
+    return call(node, client.set_parameters([Parameter(name, value=value)])).results[0]
+
+
+def get_one(node, client, name):
+    """Get one parameter's value (rclpy's Parameter value)."""
+    return parameter_value_to_python(call(node, client.get_parameters([name])).values[0])
+
+
+@pytest.fixture
+def ros_node():
+    rclpy.init()
+    node = rclpy.create_node('param_test_client')
+    try:
+        yield node
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(180)
+def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_path, ros_node):
+    command = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
+               '--params-file', str(PARAMS), '-p', 'agent_id:=1']
+    with started(command, tmp_path / 'agent.log') as agent:
+        client = AsyncParameterClient(ros_node, '/agent_1/agent')
+        assert client.wait_for_services(timeout_sec=WAIT_S), (tmp_path / 'agent.log').read_text()
+
+        described = call(ros_node, client.describe_parameters(
+            ['sensor.p_detect', 'search.investigate_steps', 'search.policy'])).descriptors
+        p_detect, budget, policy = described
+        assert 'p_D' in p_detect.description and p_detect.read_only
+        assert (p_detect.floating_point_range[0].from_value,
+                p_detect.floating_point_range[0].to_value) == (0.0, 1.0)
+        assert '(0, 1]' in p_detect.additional_constraints
+        assert not budget.read_only and budget.integer_range[0].from_value == 1
+        assert "'thompson'" in policy.additional_constraints and policy.read_only
+        names = {name for schema in (SatParams, AgentNodeParams)
+                 for name, _, _ in leaves(schema)}
+        listed = call(ros_node, client.list_parameters()).result.names
+        assert names <= set(listed)
+
+        refused = set_one(ros_node, client, 'sensor.p_detect', 5.0)
+        assert not refused.successful and 'read-only' in refused.reason
+        assert get_one(ros_node, client, 'sensor.p_detect') == 0.99
+
+        # Outside the descriptor's range: rclpy refuses first, naming the range.
+        refused = set_one(ros_node, client, 'search.investigate_steps', 0)
+        assert not refused.successful
+        assert 'search.investigate_steps out of range. Min: 1, Max: 10000, value: 0' \
+            in refused.reason
+        # At an open end, or of the wrong type: the schema refuses (the on-set callback).
+        refused = set_one(ros_node, client, 'report_wait_timeout', 0.0)
+        assert not refused.successful
+        assert "'report_wait_timeout' = 0.0: allowed range is (0, 86400]" in refused.reason
+        refused = set_one(ros_node, client, 'view_rate', 'hello')
+        assert not refused.successful
+        assert "'view_rate' = 'hello': must be a number" in refused.reason
+        assert get_one(ros_node, client, 'search.investigate_steps') == 4
+
+        applied = set_one(ros_node, client, 'search.investigate_steps', 7)
+        assert applied.successful, applied.reason
+        assert get_one(ros_node, client, 'search.investigate_steps') == 7
+        applied = set_one(ros_node, client, 'view_rate', 2)     # an int for a float is fine
+        assert applied.successful, applied.reason
+        assert agent.poll() is None, (tmp_path / 'agent.log').read_text()
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(300)
+def test_a_live_comm_range_change_cuts_world_sims_radio_links(tmp_path, ros_node):
+    scenario = write_scenario(tmp_path / 'pair.yaml', name='pair', seed=3, steps=400,
+                              agents=[{'id': 1, 'start': [40.0, 50.0]},
+                                      {'id': 2, 'start': [50.0, 50.0]}])
+    common = ['--params-file', str(PARAMS), '-p', 'seed:=3']
+    world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *common,
+             '-p', f'scenario:={scenario}', '-p', 'clock:=real_time', '-p', 'period:=0.3']
+    agents = [[executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{i}',
+               *common, '-p', f'agent_id:={i}'] for i in (1, 2)]
+    traffic = {}
+    ros_node.create_subscription(RadioTraffic, '/world/radio',
+                                 lambda m: traffic.__setitem__(m.step, len(m.link_a)), 50)
+
+    def spin_until(done, timeout=WAIT_S):
+        deadline = time.monotonic() + timeout
+        while not done() and time.monotonic() < deadline:
+            rclpy.spin_once(ros_node, timeout_sec=0.05)
+        return done()
+
+    with started(world, tmp_path / 'world.log'), \
+            started(agents[0], tmp_path / 'agent_1.log'), \
+            started(agents[1], tmp_path / 'agent_2.log'):
+        client = AsyncParameterClient(ros_node, '/world_sim')
+        assert client.wait_for_services(timeout_sec=WAIT_S)
+        # 10 m apart at the start, within C_R = 50 m: linked.
+        assert spin_until(lambda: any(traffic.values())), (tmp_path / 'world.log').read_text()
+
+        refused = set_one(ros_node, client, 'cooperation.comm_range', -1.0)
+        assert not refused.successful
+        assert 'cooperation.comm_range out of range Min: 0.0, Max: inf, value: -1.0' \
+            in refused.reason
+        refused = set_one(ros_node, client, 'radio.loss', 1.0)
+        assert not refused.successful
+        assert "'radio.loss' = 1.0: allowed range is [0, 1)" in refused.reason
+        assert any(traffic.values())
+        refused = set_one(ros_node, client, 'radio.delay_steps', 2)
+        assert not refused.successful and 'read-only' in refused.reason
+
+        applied = set_one(ros_node, client, 'cooperation.comm_range', 0.0)
+        assert applied.successful, applied.reason
+        changed_at = max(traffic)
+        assert get_one(ros_node, client, 'cooperation.comm_range') == 0.0
+        # From the next step on, no pair is within 0 m.
+        assert spin_until(lambda: max(traffic) > changed_at + 2)
+        assert all(traffic[k] == 0 for k in traffic if k > changed_at + 1)
