@@ -52,6 +52,10 @@ class Spec:
     required: bool = False
     live: bool = False
 
+    def _brackets(self) -> Tuple[str, str]:
+        return ('(' if self.low_open or self.low == -INF else '[',
+                ')' if self.high_open or self.high == INF else ']')
+
     def allowed(self) -> str:
         """Return what values are allowed, in words (error messages and ROS descriptors)."""
         if self.kind == 'bool':
@@ -62,7 +66,7 @@ class Spec:
             return 'a non-empty string' if self.required else 'a string'
         if self.kind == 'ints':
             return 'a list of integers'
-        left, right = '(' if self.low_open else '[', ')' if self.high_open else ']'
+        left, right = self._brackets()
         what = 'an integer' if self.kind == 'int' else 'a number'
         return f'{what} in {left}{_bound(self.low)}, {_bound(self.high)}{right}'
 
@@ -84,17 +88,18 @@ class Spec:
                     isinstance(v, int) and not isinstance(v, bool) for v in value):
                 raise refuse('must be a list of integers')
             return tuple(int(v) for v in value)
+        what = 'must be an integer' if self.kind == 'int' else 'must be a number'
         if isinstance(value, bool):
-            raise refuse('must be a number')
+            raise refuse(what)
         try:
             number = float(value)
         except (TypeError, ValueError):
-            raise refuse('must be a number') from None
+            raise refuse(what) from None
         if not math.isfinite(number):
             raise refuse('must be finite')
         if self.kind == 'int':
             if not number.is_integer():
-                raise refuse('must be an integer')
+                raise refuse(what)
             return int(number)
         return number
 
@@ -112,7 +117,7 @@ class Spec:
         too_low = value <= low if self.low_open else value < low
         too_high = value >= self.high if self.high_open else value > self.high
         if too_low or too_high:
-            left, right = '(' if self.low_open else '[', ')' if self.high_open else ']'
+            left, right = self._brackets()
             shown = _bound(low) if self.low == low else f'{self.low} = {_bound(low)}'
             raise ParameterError(f"parameter '{key}' = {value!r}: allowed range is "
                                  f'{left}{shown}, {_bound(self.high)}{right}')
