@@ -2,12 +2,14 @@
 
 ``ros2 param set`` of a read-only parameter is refused by rclpy; of a live one with a bad value,
 refused with the schema's reason (the parameter, the value, what is allowed); of a live one with
-a good value, applied: ``get`` shows it and the node behaves by it (world_sim's radio links).
+a good value, applied: ``get`` shows it and the node behaves by it (world_sim's radio links,
+an agent's views).
 ``ros2 param describe`` shows each parameter's description, range and read-only flag.
 """
 
 import time
 
+from geometry_msgs.msg import PoseStamped
 import pytest
 import rclpy
 from rclpy.parameter import Parameter, parameter_value_to_python
@@ -17,6 +19,8 @@ from ros_harness import executable, PARAMS, started, write_scenario
 from sat_agent.config import SatParams
 from sat_agent.node_params import AgentNodeParams
 from sat_agent.parameter_schema import leaves
+from sat_agent.ros.qos import WORLD
+from sat_agent.topic_names import VIEW_PREFIX
 from sat_msgs.msg import RadioTraffic
 
 WAIT_S = 60.0
@@ -32,6 +36,12 @@ def call(node, future, timeout: float = WAIT_S):
 def set_one(node, client, name, value):
     """Set one parameter; return its SetParametersResult."""
     return call(node, client.set_parameters([Parameter(name, value=value)])).results[0]
+
+
+def assert_refused(node, client, name, value, reason: str):
+    """Set one parameter and check it is refused with reason in the answer."""
+    result = set_one(node, client, name, value)
+    assert not result.successful and reason in result.reason, result.reason
 
 
 def get_one(node, client, name):
@@ -73,22 +83,17 @@ def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_pat
         listed = call(ros_node, client.list_parameters()).result.names
         assert names <= set(listed)
 
-        refused = set_one(ros_node, client, 'sensor.p_detect', 5.0)
-        assert not refused.successful and 'read-only' in refused.reason
+        assert_refused(ros_node, client, 'sensor.p_detect', 5.0, 'read-only')
         assert get_one(ros_node, client, 'sensor.p_detect') == 0.99
 
         # Outside the descriptor's range: rclpy refuses first, naming the range.
-        refused = set_one(ros_node, client, 'search.investigate_steps', 0)
-        assert not refused.successful
-        assert 'search.investigate_steps out of range. Min: 1, Max: 10000, value: 0' \
-            in refused.reason
+        assert_refused(ros_node, client, 'search.investigate_steps', 0,
+                       'search.investigate_steps out of range. Min: 1, Max: 10000, value: 0')
         # At an open end, or of the wrong type: the schema refuses (the on-set callback).
-        refused = set_one(ros_node, client, 'report_wait_timeout', 0.0)
-        assert not refused.successful
-        assert "'report_wait_timeout' = 0.0: allowed range is (0, 86400]" in refused.reason
-        refused = set_one(ros_node, client, 'view_rate', 'hello')
-        assert not refused.successful
-        assert "'view_rate' = 'hello': must be a number" in refused.reason
+        assert_refused(ros_node, client, 'report_wait_timeout', 0.0,
+                       "'report_wait_timeout' = 0.0: allowed range is (0, 86400]")
+        assert_refused(ros_node, client, 'view_rate', 'hello',
+                       "'view_rate' = 'hello': must be a number")
         assert get_one(ros_node, client, 'search.investigate_steps') == 4
 
         applied = set_one(ros_node, client, 'search.investigate_steps', 7)
@@ -101,7 +106,7 @@ def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_pat
 
 @pytest.mark.ros
 @pytest.mark.timeout(300)
-def test_a_live_comm_range_change_cuts_world_sims_radio_links(tmp_path, ros_node):
+def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path, ros_node):
     scenario = write_scenario(tmp_path / 'pair.yaml', name='pair', seed=3, steps=400,
                               agents=[{'id': 1, 'start': [40.0, 50.0]},
                                       {'id': 2, 'start': [50.0, 50.0]}])
@@ -110,9 +115,11 @@ def test_a_live_comm_range_change_cuts_world_sims_radio_links(tmp_path, ros_node
              '-p', f'scenario:={scenario}', '-p', 'clock:=real_time', '-p', 'period:=0.3']
     agents = [[executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{i}',
                *common, '-p', f'agent_id:={i}'] for i in (1, 2)]
-    traffic = {}
+    traffic, views = {}, set()
     ros_node.create_subscription(RadioTraffic, '/world/radio',
                                  lambda m: traffic.__setitem__(m.step, len(m.link_a)), 50)
+    ros_node.create_subscription(PoseStamped, f'/agent_1/{VIEW_PREFIX}pose',
+                                 lambda m: views.add(m.header.stamp.sec), WORLD)
 
     def spin_until(done, timeout=WAIT_S):
         deadline = time.monotonic() + timeout
@@ -128,21 +135,27 @@ def test_a_live_comm_range_change_cuts_world_sims_radio_links(tmp_path, ros_node
         # 10 m apart at the start, within C_R = 50 m: linked.
         assert spin_until(lambda: any(traffic.values())), (tmp_path / 'world.log').read_text()
 
-        refused = set_one(ros_node, client, 'cooperation.comm_range', -1.0)
-        assert not refused.successful
-        assert 'cooperation.comm_range out of range Min: 0.0, Max: inf, value: -1.0' \
-            in refused.reason
-        refused = set_one(ros_node, client, 'radio.loss', 1.0)
-        assert not refused.successful
-        assert "'radio.loss' = 1.0: allowed range is [0, 1)" in refused.reason
+        assert_refused(ros_node, client, 'cooperation.comm_range', -1.0,
+                       'cooperation.comm_range out of range Min: 0.0, Max: inf, value: -1.0')
+        assert_refused(ros_node, client, 'radio.loss', 1.0,
+                       "'radio.loss' = 1.0: allowed range is [0, 1)")
         assert any(traffic.values())
-        refused = set_one(ros_node, client, 'radio.delay_steps', 2)
-        assert not refused.successful and 'read-only' in refused.reason
+        assert_refused(ros_node, client, 'radio.delay_steps', 2, 'read-only')
 
         applied = set_one(ros_node, client, 'cooperation.comm_range', 0.0)
         assert applied.successful, applied.reason
         changed_at = max(traffic)
         assert get_one(ros_node, client, 'cooperation.comm_range') == 0.0
-        # From the next step on, no pair is within 0 m.
-        assert spin_until(lambda: max(traffic) > changed_at + 2)
-        assert all(traffic[k] == 0 for k in traffic if k > changed_at + 1)
+        # Within a step or two (messages in flight), no pair is within 0 m.
+        assert spin_until(lambda: max(traffic) > changed_at + 4)
+        assert all(traffic[k] == 0 for k in traffic if k > changed_at + 2)
+
+        # The agent's views (every step at view_rate 1 with dt = 1 s) stop at view_rate 0.
+        agent = AsyncParameterClient(ros_node, '/agent_1/agent')
+        assert agent.wait_for_services(timeout_sec=WAIT_S)
+        assert max(views) > 0
+        applied = set_one(ros_node, agent, 'view_rate', 0.0)
+        assert applied.successful, applied.reason
+        stopped_at = max(traffic)
+        assert spin_until(lambda: max(traffic) > stopped_at + 4)
+        assert not [k for k in views if k > stopped_at + 2]

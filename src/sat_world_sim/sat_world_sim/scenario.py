@@ -11,7 +11,7 @@ A scenario is a YAML mapping (see ``config/scenarios/paper.yaml`` and ``random.y
     targets:               # scripted targets (optional); via: optional [k, x, y] waypoints
       - {id: 1, born: 104, died: 179, start: [50.0, 69.0], end: [80.0, 31.0],
          via: [[144, 44.0, 34.0]]}
-    random_births:         # random targets (optional)
+    random_births:         # random targets (optional; a missing key takes the value shown)
       rate: 0.02           # expected births per step, uniform over the area
       survival: 0.99       # per-step survival probability of a random target
       speed_std: 0.5       # m/s, std of each velocity component of a newborn

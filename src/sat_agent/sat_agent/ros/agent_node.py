@@ -23,6 +23,10 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
 
 Every header carries the step's sim time and a frame (sat_agent.stamps).
 
+Parameters: SatParams and node_params.AgentNodeParams (sat_agent.ros.ros_params declares them);
+those in LIVE may be changed with ``ros2 param set`` while the agent runs, the rest are
+read-only.
+
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
 seconds with what it has (a lost message must not stall it). If world_sim dies, the agent

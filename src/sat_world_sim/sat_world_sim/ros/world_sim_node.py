@@ -14,6 +14,10 @@ loss, delay, counters); this node moves messages:
   are: a report reaches ~30 agents with 64 spread over the area, and publishing a message
   object (serialised again for each receiver) took about half of this node's CPU with 48.
 
+Parameters: SatParams and sat_agent.node_params.WorldNodeParams; those in LIVE (the radio
+range C_R and loss, ``agent_timeout``, ``view_rate``) may be changed with ``ros2 param set``
+while it runs, the rest are read-only.
+
 Clocks (parameter ``clock``):
 
 - ``lock_step``: step k+1 starts as soon as every active agent has sent its command and its
