@@ -20,7 +20,6 @@ import math
 from typing import Any, Iterator, Mapping, Tuple, Union
 
 INF = math.inf
-KINDS = ('bool', 'int', 'float', 'str', 'ints')
 
 
 class ParameterError(ValueError):
@@ -35,11 +34,11 @@ def _bound(number) -> str:
 class Spec:
     """What one parameter means and allows.
 
-    kind is one of KINDS ('ints': a list of integers). Numbers lie in [low, high] (open ends
-    with low_open / high_open); low may name a sibling parameter whose value is the bound.
-    Strings must be one of choices when given, and non-empty when required. live: the value
-    may change while a node runs (a node applies the live parameters it uses; the others are
-    read-only there).
+    kind is 'bool', 'int', 'float', 'str' or 'ints' (a list of integers). Numbers lie in
+    [low, high] (open ends with low_open / high_open); low may name a sibling parameter whose
+    value is the bound. Strings must be one of choices when given, and non-empty when required.
+    live: the value may change while a node runs (a node applies the live parameters it uses;
+    the others are read-only there).
     """
 
     description: str
