@@ -1,9 +1,9 @@
 """The logger node: streams the live graph into a Rerun recording (rerun_view has the layout).
 
 Subscribes to ``/world/step``, ``/world/truth``, ``/world/radio`` and every agent's ``status``
-and ``radio/out/search_density`` (the metrics node's subscription set and QoS, sat_agent.ros.qos)
-and, like every observer, announces itself on ``/world/observers`` once they have all matched
-(observer.ReadyAnnouncer): world_sim counts it among its ``observers``. Messages are
+and ``radio/out/search_density`` (the metrics node's subscription set and QoS,
+sat_agent.ros.qos) and, like every observer, announces itself on ``/world/ready`` once they have
+all matched (sat_agent.ros.readiness): world_sim counts it among its ``observers``. Messages are
 grouped by step (rerun_view.StepBuffer, which an offline replay of a bag can use as well); a
 step is logged, in order, once its truth, radio and the statuses and densities of its active
 agents are in, or once a later step is complete (a lost status is then left out). After the

@@ -32,12 +32,16 @@ position and is not waited for until it speaks again. Commands that are not one 
 of Eqn. controlVectors or leave the area are refused with a log line; the agent holds. Every
 command and report is validated (the sender's namespace, the step, the content: the radio never
 forwards garbage); what is dropped is counted per reason on ``/diagnostics``.
-When the run is over the node publishes a final WorldStep with ``finished`` (the agents exit on
-it) and exits. Its timers run on the steady clock (node_runner.steady_timer): it is the source
-of ``/clock``, so under ``use_sim_time`` its own ROS clock only moves when it steps.
+Step 1 starts once the start-up handshake of sat_agent.ros.readiness says no first message can
+be lost (or after ``startup_timeout`` seconds, with a warning naming what is missing). When the
+run is over the node publishes a final WorldStep with ``finished`` (the agents exit on it) and
+exits once its readers acknowledged the last messages. Its timers run on the steady clock
+(node_runner.steady_timer): it is the source of ``/clock``, so under ``use_sim_time`` its own
+ROS clock only moves when it steps.
 """
 
 from collections import Counter
+import json
 from pathlib import Path
 import time
 
@@ -53,11 +57,12 @@ from sat_agent.agent_core import wire_bytes
 from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION
 from sat_agent.node_params import WorldNodeParams
-from sat_agent.ros import views
+from sat_agent.ros import readiness, views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.msg_conversions import (header, InvalidMessage, measurements_to_msg, point,
                                            RADIO_TYPES)
-from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.node_runner import (all_acked, FINAL_ACK_TIMEOUT_S, finish_run, run_nodes,
+                                       steady_timer)
 from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.ros_params import NodeParameters
@@ -68,12 +73,10 @@ from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSe
                           TargetTruth, WorldStep)
 
 from sat_world_sim.radio import Radio
-from sat_world_sim.ros import observer
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
-DISCOVERY_SETTLE_S = 0.5
 # Applied while world_sim runs (``ros2 param set``); the others are read-only here.
 LIVE = ('cooperation.comm_range', 'radio.loss', 'agent_timeout', 'view_rate')
 
@@ -118,8 +121,7 @@ class WorldSimNode(Node):
         self._reports = {i: set() for i in self.ids}
         self._deadline = None
         self._started = False
-        self._ready_since = None
-        self._observers_ready = set()
+        self._announcements = {}      # node name -> its last start-up announcement
         self._finished_at = None
         self._last_view_step = None
 
@@ -142,8 +144,7 @@ class WorldSimNode(Node):
                 self.create_subscription(
                     cls, f'{ns}/radio/out/{kind}',
                     lambda data, i=i, kind=kind: self.on_report(i, kind, data), RADIO, raw=True)
-        self.create_subscription(String, observer.TOPIC,
-                                 lambda m: self._observers_ready.add(m.data), observer.QOS)
+        self.create_subscription(String, readiness.TOPIC, self.on_announcement, readiness.QOS)
         self._launched = time.monotonic()
         steady_timer(self, 0.02, self._tick)
         self.get_logger().info(
@@ -158,32 +159,41 @@ class WorldSimNode(Node):
 
     # -- start-up ---------------------------------------------------------------------------
 
-    def _graph_ready(self) -> bool:
-        """Every agent's topics are matched both ways, and the expected observers are there.
+    def on_announcement(self, msg: String):
+        """Keep each node's last start-up announcement (sat_agent.ros.readiness)."""
+        try:
+            announced = json.loads(msg.data)
+            name, reads, writes = announced['node'], announced['reads'], announced['writes']
+            if not isinstance(reads, list) or not isinstance(writes, dict):
+                raise TypeError('reads must be a list and writes a mapping')
+        except (ValueError, KeyError, TypeError) as error:
+            self.guard.drop('bad_announcement', f'{readiness.TOPIC}: {error}')
+            return
+        self._announcements[str(name)] = announced
 
-        ``observers`` is how many nodes besides the agents must see the run from its first step
-        (the metrics node, a logger, a recorder): each announces itself on /world/observers once
-        all its subscriptions are matched (sat_world_sim.ros.observer).
+    def _unmet(self):
+        """Return what keeps step 1 from starting (sat_agent.ros.readiness).
+
+        Every agent and ``observers`` other nodes (metrics, a logger, a recorder, a test's
+        watcher) must have announced, and every writer must have matched their readers.
         """
-        for i in self.ids:
-            ns = f'/agent_{i}'
-            if self.scan_pubs[i].get_subscription_count() == 0:
-                return False
-            if self.count_publishers(f'{ns}/cmd') == 0:
-                return False
-            if any(self.inbox_pubs[(i, kind)].get_subscription_count() == 0
-                   or self.count_publishers(f'{ns}/radio/out/{kind}') == 0
-                   for kind in RADIO_TYPES):
-                return False
-        return len(self._observers_ready) >= self.observers
+        return readiness.unmet(
+            self._announcements, (s.topic_name for s in self.subscriptions),
+            {p.topic_name: p.get_subscription_count() for p in self._run_publishers()},
+            self.ids, self.observers)
+
+    def _run_publishers(self):
+        return [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub,
+                *self.scan_pubs.values(), *self.inbox_pubs.values()]
 
     # -- the loop ---------------------------------------------------------------------------
 
     def _tick(self):
         now = time.monotonic()
         if self._finished_at is not None:
-            # Give the last messages time to leave before the process exits.
-            if now - self._finished_at > 1.0:
+            # A reliable writer destroyed with unacknowledged samples loses them: the observers
+            # would miss the final step.
+            if self._final_messages_acked() or now - self._finished_at > FINAL_ACK_TIMEOUT_S:
                 finish_run(self, 0)
             return
         if not self._started:
@@ -209,19 +219,21 @@ class WorldSimNode(Node):
             self._finish_step()
 
     def _start_when_ready(self, now: float):
-        if not self._graph_ready():
-            self._ready_since = None
-            if now - self._launched > self.startup_timeout:
-                self.get_logger().warning('start-up timeout: starting with the agents found')
-                self._started = True
-                self._begin_step()
+        unmet = self._unmet()
+        if unmet and now - self._launched <= self.startup_timeout:
             return
-        # Discovery is not symmetric at one instant: let the other nodes match too.
-        if self._ready_since is None:
-            self._ready_since = now
-        elif now - self._ready_since >= DISCOVERY_SETTLE_S:
-            self._started = True
-            self._begin_step()
+        if unmet:
+            self.get_logger().warning(f'start-up timeout ({self.startup_timeout} s): starting '
+                                      f"without: {'; '.join(unmet)}")
+        self._started = True
+        self._begin_step()
+
+    def _final_messages_acked(self) -> bool:
+        """Whether /clock, the world's topics, the active agents' scans and inboxes are acked."""
+        publishers = [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub]
+        publishers += [self.scan_pubs[i] for i in self.active]
+        publishers += [p for (i, _), p in self.inbox_pubs.items() if i in self.active]
+        return all_acked(publishers)
 
     def _answered(self, agent_id: int) -> bool:
         return agent_id in self._cmds and len(self._reports[agent_id]) == len(RADIO_TYPES)
