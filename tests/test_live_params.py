@@ -7,14 +7,12 @@ an agent's views).
 ``ros2 param describe`` shows each parameter's description, range and read-only flag.
 """
 
-import time
-
 from geometry_msgs.msg import PoseStamped
 import pytest
-import rclpy
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
-from ros_harness import executable, PARAMS, started, write_scenario
+from ros_harness import (executable, PARAMS, ros_node, scaled, spin_until, started,
+                         write_scenario)
 
 from sat_agent.config import SatParams
 from sat_agent.node_params import AgentNodeParams
@@ -23,19 +21,31 @@ from sat_agent.ros.qos import WORLD
 from sat_agent.topic_names import VIEW_PREFIX
 from sat_msgs.msg import RadioTraffic
 
-WAIT_S = 60.0
+# Bounds (scaled by SAT_TEST_TIMEOUT_SCALE): a node's start-up, a parameter service's answer.
+START_S = 60.0
+ANSWER_S = 30.0
+# Steps after a change that may still show the old value (messages in flight) or be watched.
+SETTLE_STEPS = 2
+WATCH_STEPS = 4
 
 
-def call(node, future, timeout: float = WAIT_S):
+def call(node, future, what: str):
     """Spin node until future is done; return its result."""
-    rclpy.spin_until_future_complete(node, future, timeout_sec=timeout)
-    assert future.done(), 'no answer from the parameter service'
+    spin_until(node, future.done, ANSWER_S, what)
     return future.result()
+
+
+def services(node, name: str) -> AsyncParameterClient:
+    """Return a parameter client of node name once its services are up."""
+    client = AsyncParameterClient(node, name)
+    assert client.wait_for_services(timeout_sec=scaled(START_S)), f'{name} parameter services'
+    return client
 
 
 def set_one(node, client, name, value):
     """Set one parameter; return its SetParametersResult."""
-    return call(node, client.set_parameters([Parameter(name, value=value)])).results[0]
+    future = client.set_parameters([Parameter(name, value=value)])
+    return call(node, future, f'set {name}').results[0]
 
 
 def assert_refused(node, client, name, value, reason: str):
@@ -46,31 +56,20 @@ def assert_refused(node, client, name, value, reason: str):
 
 def get_one(node, client, name):
     """Get one parameter's value (rclpy's Parameter value)."""
-    return parameter_value_to_python(call(node, client.get_parameters([name])).values[0])
-
-
-@pytest.fixture
-def ros_node():
-    rclpy.init()
-    node = rclpy.create_node('param_test_client')
-    try:
-        yield node
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    answer = call(node, client.get_parameters([name]), f'get {name}')
+    return parameter_value_to_python(answer.values[0])
 
 
 @pytest.mark.ros
 @pytest.mark.timeout(180)
-def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_path, ros_node):
+def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_path):
     command = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
                '--params-file', str(PARAMS), '-p', 'agent_id:=1']
-    with started(command, tmp_path / 'agent.log') as agent:
-        client = AsyncParameterClient(ros_node, '/agent_1/agent')
-        assert client.wait_for_services(timeout_sec=WAIT_S), (tmp_path / 'agent.log').read_text()
-
-        described = call(ros_node, client.describe_parameters(
-            ['sensor.p_detect', 'search.investigate_steps', 'search.policy'])).descriptors
+    with ros_node('param_test_client') as node, started(command, tmp_path / 'agent.log') as agent:
+        client = services(node, '/agent_1/agent')
+        described = call(node, client.describe_parameters(
+            ['sensor.p_detect', 'search.investigate_steps', 'search.policy']),
+            'describe').descriptors
         p_detect, budget, policy = described
         assert 'p_D' in p_detect.description and p_detect.read_only
         assert (p_detect.floating_point_range[0].from_value,
@@ -80,33 +79,33 @@ def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_pat
         assert "'thompson'" in policy.additional_constraints and policy.read_only
         names = {name for schema in (SatParams, AgentNodeParams)
                  for name, _, _ in leaves(schema)}
-        listed = call(ros_node, client.list_parameters()).result.names
+        listed = call(node, client.list_parameters(), 'list').result.names
         assert names <= set(listed)
 
-        assert_refused(ros_node, client, 'sensor.p_detect', 5.0, 'read-only')
-        assert get_one(ros_node, client, 'sensor.p_detect') == 0.99
+        assert_refused(node, client, 'sensor.p_detect', 5.0, 'read-only')
+        assert get_one(node, client, 'sensor.p_detect') == 0.99
 
         # Outside the descriptor's range: rclpy refuses first, naming the range.
-        assert_refused(ros_node, client, 'search.investigate_steps', 0,
+        assert_refused(node, client, 'search.investigate_steps', 0,
                        'search.investigate_steps out of range. Min: 1, Max: 10000, value: 0')
         # At an open end, or of the wrong type: the schema refuses (the on-set callback).
-        assert_refused(ros_node, client, 'report_wait_timeout', 0.0,
+        assert_refused(node, client, 'report_wait_timeout', 0.0,
                        "'report_wait_timeout' = 0.0: allowed range is (0, 86400]")
-        assert_refused(ros_node, client, 'view_rate', 'hello',
+        assert_refused(node, client, 'view_rate', 'hello',
                        "'view_rate' = 'hello': must be a number")
-        assert get_one(ros_node, client, 'search.investigate_steps') == 4
+        assert get_one(node, client, 'search.investigate_steps') == 4
 
-        applied = set_one(ros_node, client, 'search.investigate_steps', 7)
+        applied = set_one(node, client, 'search.investigate_steps', 7)
         assert applied.successful, applied.reason
-        assert get_one(ros_node, client, 'search.investigate_steps') == 7
-        applied = set_one(ros_node, client, 'view_rate', 2)     # an int for a float is fine
+        assert get_one(node, client, 'search.investigate_steps') == 7
+        applied = set_one(node, client, 'view_rate', 2)     # an int for a float is fine
         assert applied.successful, applied.reason
         assert agent.poll() is None, (tmp_path / 'agent.log').read_text()
 
 
 @pytest.mark.ros
 @pytest.mark.timeout(300)
-def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path, ros_node):
+def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
     scenario = write_scenario(tmp_path / 'pair.yaml', name='pair', seed=3, steps=400,
                               agents=[{'id': 1, 'start': [40.0, 50.0]},
                                       {'id': 2, 'start': [50.0, 50.0]}])
@@ -116,46 +115,42 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path, ros
     agents = [[executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{i}',
                *common, '-p', f'agent_id:={i}'] for i in (1, 2)]
     traffic, views = {}, set()
-    ros_node.create_subscription(RadioTraffic, '/world/radio',
+    with ros_node('param_test_client') as node, \
+            started(world, tmp_path / 'world.log') as world_sim, \
+            started(agents[0], tmp_path / 'agent_1.log') as agent_1, \
+            started(agents[1], tmp_path / 'agent_2.log') as agent_2:
+        running = (world_sim, agent_1, agent_2)
+        node.create_subscription(RadioTraffic, '/world/radio',
                                  lambda m: traffic.__setitem__(m.step, len(m.link_a)), 50)
-    ros_node.create_subscription(PoseStamped, f'/agent_1/{VIEW_PREFIX}pose',
+        node.create_subscription(PoseStamped, f'/agent_1/{VIEW_PREFIX}pose',
                                  lambda m: views.add(m.header.stamp.sec), WORLD)
-
-    def spin_until(done, timeout=WAIT_S):
-        deadline = time.monotonic() + timeout
-        while not done() and time.monotonic() < deadline:
-            rclpy.spin_once(ros_node, timeout_sec=0.05)
-        return done()
-
-    with started(world, tmp_path / 'world.log'), \
-            started(agents[0], tmp_path / 'agent_1.log'), \
-            started(agents[1], tmp_path / 'agent_2.log'):
-        client = AsyncParameterClient(ros_node, '/world_sim')
-        assert client.wait_for_services(timeout_sec=WAIT_S)
+        client = services(node, '/world_sim')
         # 10 m apart at the start, within C_R = 50 m: linked.
-        assert spin_until(lambda: any(traffic.values())), (tmp_path / 'world.log').read_text()
+        spin_until(node, lambda: any(traffic.values()), START_S, 'a step with a radio link',
+                   running)
 
-        assert_refused(ros_node, client, 'cooperation.comm_range', -1.0,
+        assert_refused(node, client, 'cooperation.comm_range', -1.0,
                        'cooperation.comm_range out of range Min: 0.0, Max: inf, value: -1.0')
-        assert_refused(ros_node, client, 'radio.loss', 1.0,
+        assert_refused(node, client, 'radio.loss', 1.0,
                        "'radio.loss' = 1.0: allowed range is [0, 1)")
         assert any(traffic.values())
-        assert_refused(ros_node, client, 'radio.delay_steps', 2, 'read-only')
+        assert_refused(node, client, 'radio.delay_steps', 2, 'read-only')
 
-        applied = set_one(ros_node, client, 'cooperation.comm_range', 0.0)
+        applied = set_one(node, client, 'cooperation.comm_range', 0.0)
         assert applied.successful, applied.reason
         changed_at = max(traffic)
-        assert get_one(ros_node, client, 'cooperation.comm_range') == 0.0
-        # Within a step or two (messages in flight), no pair is within 0 m.
-        assert spin_until(lambda: max(traffic) > changed_at + 4)
-        assert all(traffic[k] == 0 for k in traffic if k > changed_at + 2)
+        assert get_one(node, client, 'cooperation.comm_range') == 0.0
+        # After the steps in flight, no pair is within 0 m.
+        spin_until(node, lambda: max(traffic) > changed_at + WATCH_STEPS, START_S,
+                   f'{WATCH_STEPS} steps after the change', running)
+        assert all(traffic[k] == 0 for k in traffic if k > changed_at + SETTLE_STEPS)
 
         # The agent's views (every step at view_rate 1 with dt = 1 s) stop at view_rate 0.
-        agent = AsyncParameterClient(ros_node, '/agent_1/agent')
-        assert agent.wait_for_services(timeout_sec=WAIT_S)
-        assert max(views) > 0
-        applied = set_one(ros_node, agent, 'view_rate', 0.0)
+        agent = services(node, '/agent_1/agent')
+        assert views
+        applied = set_one(node, agent, 'view_rate', 0.0)
         assert applied.successful, applied.reason
         stopped_at = max(traffic)
-        assert spin_until(lambda: max(traffic) > stopped_at + 4)
-        assert not [k for k in views if k > stopped_at + 2]
+        spin_until(node, lambda: max(traffic) > stopped_at + WATCH_STEPS, START_S,
+                   f'{WATCH_STEPS} steps after view_rate 0', running)
+        assert not [k for k in views if k > stopped_at + SETTLE_STEPS]
