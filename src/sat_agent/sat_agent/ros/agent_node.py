@@ -26,6 +26,10 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
 
 Every header carries the step's sim time and a frame (sat_agent.stamps).
 
+Parameters: SatParams and node_params.AgentNodeParams (sat_agent.ros.ros_params declares them);
+those in LIVE may be changed with ``ros2 param set`` while the agent runs, the rest are
+read-only.
+
 Until its first scan the agent announces on ``/world/ready`` how many readers its writers have
 matched (sat_agent.ros.readiness): world_sim starts once none of the run's first messages can
 be lost. With robot input it announces the robot inputs instead of the world's, so a robot (or a
@@ -67,7 +71,9 @@ from sensor_msgs.msg import PointCloud2
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
+from sat_agent.config import SatParams
 from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
+from sat_agent.node_params import AgentNodeParams
 from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.message_limits import MessageLimits, STATUS_PARTICLES
@@ -80,8 +86,8 @@ from sat_agent.ros.qos import RADIO, ROBOT, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.readiness import ReadyAnnouncer
 from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotPose
-from sat_agent.ros.ros_params import AGENT_PARAMS, declare_node_params, declare_sat_params
-from sat_agent.ros.signed_io import declare_auth, SignedPublisher, VerifiedInput
+from sat_agent.ros.ros_params import NodeParameters
+from sat_agent.ros.signed_io import auth_key, SignedPublisher, VerifiedInput
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_at, views_due
 from sat_agent.topic_names import (AGENT_VIEWS, radio_topic, ROBOT_DETECTIONS, ROBOT_GOAL,
@@ -93,6 +99,8 @@ MAX_STEP_JUMP = 1000
 # Reports older than this many steps are stale; younger late ones (radio latency) still add
 # their search density (Agent.step).
 MAX_REPORT_LAG = 4
+# Applied while the agent runs (``ros2 param set``); the others are read-only here.
+LIVE = ('search.investigate_steps', 'view_rate', 'report_wait_timeout', 'world_timeout')
 # Composed mode: parsed radio messages kept per agent of the process, two steps' worth of its
 # three messages (radio_parsing.py).
 PARSED_PER_AGENT = 2 * len(REPORT_KINDS)
@@ -107,8 +115,8 @@ class AgentNode(Node):
     def __init__(self, radio_parser: Optional[RadioParser] = None, **kwargs):
         super().__init__('agent', **kwargs)
         self.radio_parser = radio_parser or RadioParser()
-        self.params = declare_sat_params(self)
-        self.node_params = declare_node_params(self, AGENT_PARAMS)
+        self.parameters = NodeParameters(self, (SatParams, AgentNodeParams), LIVE, self._retune)
+        self.params, self.node_params = self.parameters.values
         self.agent_id = self.node_params.agent_id
         self.dt = self.params.motion.dt
         self._last_scan_at = None
@@ -116,8 +124,10 @@ class AgentNode(Node):
         self.core = None
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.last_step = 0
-        self.guard = InputGuard(self, f'agent_{self.agent_id}')
-        key = declare_auth(self)
+        self.guard = InputGuard(self, f'agent_{self.agent_id}',
+                                self.node_params.diagnostics_period)
+        key = auth_key(self, self.node_params.auth_key_file)
+        # The roster (the bring-up passes it); unset: any sender the relay sealed for us.
         roster = self.declare_parameter('agent_ids', Parameter.Type.INTEGER_ARRAY).value
         self.inputs = VerifiedInput(self, self.guard, key, roster,
                                     StepWindow(behind=MAX_REPORT_LAG, ahead=1,
@@ -162,6 +172,12 @@ class AgentNode(Node):
         self.ready = ReadyAnnouncer(self, inputs, self.answer_pubs)
         steady_timer(self, 0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
+
+    def _retune(self, params: SatParams, node_params: AgentNodeParams):
+        """Take a live change (LIVE): the node reads its own at each use, the core at each step."""
+        self.params, self.node_params = params, node_params
+        if self.core is not None:
+            self.core.retune(params)
 
     # -- input ------------------------------------------------------------------------------
 

@@ -2,9 +2,10 @@
 
 The maths is sat_agent.message_auth (ROS-free); this module moves bytes between it and rclpy:
 
-- ``declare_auth(node)``: the node parameter ``auth_key_file`` (a path, never the key itself:
-  parameters are readable through services, command lines through /proc). '' = authentication
-  off, logged at WARN (message_auth.AUTH_OFF_WARNING) and shown on /diagnostics.
+- ``auth_key(node, path)``: the key of the node parameter ``auth_key_file`` (a path, never the
+  key itself: parameters are readable through services, command lines through /proc;
+  sat_agent.node_params). '' = authentication off, logged at WARN
+  (message_auth.AUTH_OFF_WARNING) and shown on /diagnostics.
 - ``SignedPublisher``: serializes a message with a zero ``auth`` and publishes the signed bytes.
   Every signed publish goes through Signer.sign, which refuses payloads shorter than the
   signature: an empty DDS sample stalls every later sample of its reliable writer.
@@ -23,16 +24,13 @@ from rclpy.serialization import deserialize_message, serialize_message
 from sat_agent.message_auth import (AUTH_OFF_WARNING, AuthError, key_from_parameter,
                                     MessageVerifier, Signed, Signer, StepWindow, WORLD_SENDER)
 
-KEY_PARAMETER = 'auth_key_file'
 
-
-def declare_auth(node) -> Optional[bytes]:
-    """Declare ``auth_key_file`` and return its key (None: authentication off, warned at WARN).
+def auth_key(node, path: str) -> Optional[bytes]:
+    """Return the key of the node's ``auth_key_file`` (None: authentication off, warned at WARN).
 
     A key file that cannot be used raises message_auth.KeyFileError (a ValueError naming the
     path): node_runner prints it as one line and the process exits with code 2.
     """
-    path = node.declare_parameter(KEY_PARAMETER, '').value
     key = key_from_parameter(path)
     if key is None:
         node.get_logger().warning(AUTH_OFF_WARNING)

@@ -22,6 +22,7 @@ Every sink also writes run.rrd. Rerun analytics are off: this process and the vi
 use a private Rerun config under ``<run_dir>/.rerun`` (rerun_view.private_rerun_env).
 """
 
+from pathlib import Path
 import subprocess
 import sys
 import time
@@ -30,15 +31,16 @@ import urllib.parse
 from rclpy.node import Node
 import rerun as rr
 
+from sat_agent.config import SatParams
+from sat_agent.node_params import LoggerParams
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
-from sat_agent.ros.ros_params import declare_sat_params
+from sat_agent.ros.ros_params import NodeParameters
 
 from sat_world_sim import rerun_view
-from sat_world_sim.ros.observer import declare_run, watch_run
+from sat_world_sim.ros.observer import watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
-SINKS = ('file', 'viewer', 'web')
 
 
 class LoggerNode(Node):
@@ -46,17 +48,9 @@ class LoggerNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('logger', **kwargs)
-        self.params = declare_sat_params(self)
-        self.run_dir, self.agent_ids = declare_run(self, 'the directory to write run.rrd in')
-        sink = self.declare_parameter('sink', 'file').value
-        if sink not in SINKS:
-            raise ValueError(f"parameter 'sink' = {sink!r}: must be one of {', '.join(SINKS)}")
-        ports = {}
-        for name, default in (('viewer_port', 9876), ('web_port', 9090)):
-            value = self.declare_parameter(name, default).value
-            if not isinstance(value, int) or not 1 <= value <= 65535:
-                raise ValueError(f"parameter '{name}' = {value!r}: must be a port in 1..65535")
-            ports[name] = value
+        self.params, run = NodeParameters(self, (SatParams, LoggerParams)).values
+        self.run_dir, self.agent_ids, sink = Path(run.run_dir), run.agent_ids, run.sink
+        ports = {'viewer_port': run.viewer_port, 'web_port': run.web_port}
         self.run_dir.mkdir(parents=True, exist_ok=True)
         self.rrd_path = self.run_dir / 'run.rrd'
         env = rerun_view.disable_analytics(self.run_dir / '.rerun')
@@ -75,7 +69,7 @@ class LoggerNode(Node):
         self.buffer = rerun_view.StepBuffer(self.view)
         self._finished_at = None
         # world_sim starts step 1 once every subscription here has matched its publisher.
-        self.watch = watch_run(self, self.params, self.agent_ids, self.buffer.add)
+        self.watch = watch_run(self, self.params, run, self.buffer.add)
         steady_timer(self, 0.1, self._tick)
         self.get_logger().info(f'logging to {self.rrd_path} (sink {sink})')
 

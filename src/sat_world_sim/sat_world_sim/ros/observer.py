@@ -1,4 +1,6 @@
-"""What the observer nodes (metrics, recorder, logger) share: parameters and guarded input.
+"""What the observer nodes (metrics, recorder, logger) share: what they read, guarded.
+
+Their parameters are sat_agent.node_params.ObserverParams (LoggerParams for the logger).
 
 **Readiness.** Each observer announces itself once all its subscriptions have a publisher
 (sat_agent.ros.readiness.ReadyAnnouncer); world_sim waits for ``observers`` of them, and for
@@ -15,7 +17,6 @@ window's worth of steps (far-future statuses).
 """
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Optional
 
 from sat_agent.agent_core import REPORT_KINDS
@@ -25,7 +26,7 @@ from sat_agent.ros.message_limits import MessageLimits
 from sat_agent.ros.msg_conversions import check_grid, InvalidMessage
 from sat_agent.ros.qos import DEPTH, RADIO, STEP, WORLD
 from sat_agent.ros.readiness import ReadyAnnouncer
-from sat_agent.ros.signed_io import declare_auth, VerifiedInput
+from sat_agent.ros.signed_io import auth_key, VerifiedInput
 from sat_agent.search_density import Lattice
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
@@ -37,18 +38,6 @@ from sat_world_sim.topics import agent_of
 # time on each topic.
 WINDOW = StepWindow(behind=DEPTH, ahead=1, world_ahead=1)
 _WORLD_TOPICS = {'/world/step': 'step', '/world/truth': 'truth', '/world/radio': 'traffic'}
-
-
-def declare_run(node, what: str):
-    """Declare the observer parameters ``run_dir`` (required) and ``agent_ids``.
-
-    Returns (run_dir as a Path, agent ids as ints); what says what goes into run_dir, for the
-    error message when it is missing.
-    """
-    run_dir = node.declare_parameter('run_dir', '').value
-    if not run_dir:
-        raise ValueError(f"parameter 'run_dir' is required: {what}")
-    return Path(run_dir), [int(i) for i in node.declare_parameter('agent_ids', [1, 2]).value]
 
 
 def signature_of(topic: str, limits: MessageLimits) -> Optional[dict]:
@@ -76,12 +65,15 @@ def signature_of(topic: str, limits: MessageLimits) -> Optional[dict]:
     return own.get(rest)
 
 
-def observer_input(node, params, agent_ids):
-    """Return (VerifiedInput, MessageLimits) of an observer node watching these agents."""
-    guard = InputGuard(node, node.get_name())
-    inputs = VerifiedInput(node, guard, declare_auth(node), agent_ids, WINDOW,
-                           window_without_key=True)
-    return inputs, MessageLimits.compute(params, len(agent_ids))
+def observer_input(node, params, run):
+    """Return (VerifiedInput, MessageLimits) of an observer node.
+
+    params: its SatParams; run: its ObserverParams (the agents it watches, the key file).
+    """
+    guard = InputGuard(node, node.get_name(), run.diagnostics_period)
+    inputs = VerifiedInput(node, guard, auth_key(node, run.auth_key_file), run.agent_ids,
+                           WINDOW, window_without_key=True)
+    return inputs, MessageLimits.compute(params, len(run.agent_ids))
 
 
 @dataclass
@@ -97,13 +89,13 @@ class Watch:
         return self.inputs.guard.dropped
 
 
-def watch_run(node, params, agent_ids, add) -> Watch:
+def watch_run(node, params, run, add) -> Watch:
     """Subscribe node to what metrics and views of a run read; feed add(topic, msg).
 
     The topics are the world's step, truth and radio traffic and every agent's status and
     search density (records.route); readiness is announced once they are all matched.
     """
-    inputs, limits = observer_input(node, params, agent_ids)
+    inputs, limits = observer_input(node, params, run)
     lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
 
     def add_density(topic, msg):
@@ -116,7 +108,7 @@ def watch_run(node, params, agent_ids, add) -> Watch:
 
     topics = [('/world/step', WorldStep, WORLD, add), ('/world/truth', GroundTruth, WORLD, add),
               ('/world/radio', RadioTraffic, WORLD, add)]
-    for i in agent_ids:
+    for i in run.agent_ids:
         topics += [(f'/agent_{i}/status', AgentStatus, STEP, add),
                    (radio_topic(i, 'out', 'search_density'), SearchDensity, RADIO, add_density)]
     subscriptions = [inputs.subscribe(cls, topic,

@@ -20,6 +20,7 @@ the signatures: a live replay of it is accepted by nodes with the run's key or w
 authentication off. Standard-typed topics (clock, views, markers, robot/goal) are not signed.
 """
 
+from pathlib import Path
 import time
 
 from rclpy.node import Node
@@ -28,15 +29,17 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
+from sat_agent.config import SatParams
+from sat_agent.node_params import ObserverParams
 from sat_agent.ros.msg_conversions import message_class
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.readiness import ReadyAnnouncer
-from sat_agent.ros.ros_params import declare_sat_params
+from sat_agent.ros.ros_params import NodeParameters
 from sat_agent.topic_names import ROBOT_GOAL
 from sat_msgs.msg import GroundTruth, WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.ros.observer import declare_run, observer_input, signature_of
+from sat_world_sim.ros.observer import observer_input, signature_of
 from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics, Topic
 
@@ -62,9 +65,9 @@ class RecorderNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('recorder', **kwargs)
-        params = declare_sat_params(self)
-        run_dir, agent_ids = declare_run(self, 'the bag goes to <run_dir>/bag')
-        self.inputs, limits = observer_input(self, params, agent_ids)
+        params, run = NodeParameters(self, (SatParams, ObserverParams)).values
+        run_dir, agent_ids = Path(run.run_dir), run.agent_ids
+        self.inputs, limits = observer_input(self, params, run)
         self.path = run_dir / 'bag'
         if self.path.exists():
             raise ValueError(f"parameter 'run_dir' = '{run_dir}': {self.path} exists already")

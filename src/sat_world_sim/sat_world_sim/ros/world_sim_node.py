@@ -14,6 +14,10 @@ loss, delay, counters); this node moves messages:
   are: a report reaches ~30 agents with 64 spread over the area, and publishing a message
   object (serialised again for each receiver) took about half of this node's CPU with 48.
 
+Parameters: SatParams and sat_agent.node_params.WorldNodeParams; those in LIVE (the radio
+range C_R and loss, ``agent_timeout``, ``view_rate``) may be changed with ``ros2 param set``
+while it runs, the rest are read-only.
+
 Clocks (parameter ``clock``):
 
 - ``lock_step``: step k+1 starts as soon as every active agent has sent its command and its
@@ -58,8 +62,10 @@ from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from sat_agent.agent_core import wire_bytes
+from sat_agent.config import SatParams
 from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
 from sat_agent.motion_model import POSITION
+from sat_agent.node_params import WorldNodeParams
 from sat_agent.ros import readiness, views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.message_limits import MessageLimits
@@ -69,8 +75,8 @@ from sat_agent.ros.node_runner import (all_acked, FINAL_ACK_TIMEOUT_S, finish_ru
                                        steady_timer)
 from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
-from sat_agent.ros.ros_params import declare_node_params, declare_sat_params, WORLD_PARAMS
-from sat_agent.ros.signed_io import declare_auth, SignedPublisher, VerifiedInput
+from sat_agent.ros.ros_params import NodeParameters
+from sat_agent.ros.signed_io import auth_key, SignedPublisher, VerifiedInput
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_time, views_due
 from sat_agent.topic_names import CLOCK, radio_topic, TRUTH_MARKERS
@@ -84,6 +90,8 @@ from sat_world_sim.world_model import World
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
 # The world knows the step: agents' messages of this step, or of the one before (to rejoin).
 WINDOW = StepWindow(behind=1, ahead=0, world_ahead=0)
+# Applied while world_sim runs (``ros2 param set``); the others are read-only here.
+LIVE = ('cooperation.comm_range', 'radio.loss', 'agent_timeout', 'view_rate')
 
 
 def default_scenario() -> str:
@@ -97,8 +105,10 @@ class WorldSimNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('world_sim', **kwargs)
-        self.params = declare_sat_params(self)
-        node = declare_node_params(self, WORLD_PARAMS)
+        self.parameters = NodeParameters(self, (SatParams, WorldNodeParams), LIVE,
+                                         self._retune)
+        self.params, self.settings = self.parameters.values
+        node = self.settings
         scenario = load_scenario(node.scenario or default_scenario(), self.params.area.width,
                                  self.params.area.height)
         if node.seed >= 0:
@@ -106,19 +116,17 @@ class WorldSimNode(Node):
         self.total_steps = node.steps if node.steps > 0 else scenario.steps
         self.clock = clock = node.clock
         self.period = node.period
-        self.agent_timeout = node.agent_timeout
         self.startup_timeout = node.startup_timeout
         self.observers = node.observers
-        self.view_rate = node.view_rate
         self.dt = self.params.motion.dt
-        self.radio = Radio(self.params.cooperation.comm_range, node.radio_loss,
-                           node.radio_delay_steps, seed=scenario.seed)
+        self.radio = Radio(self.params.cooperation.comm_range, node.radio.loss,
+                           node.radio.delay_steps, seed=scenario.seed)
 
         self.world = World(scenario, self.params)
         self.ids = self.world.agent_ids
         self.active = set(self.ids)
-        self.guard = InputGuard(self, 'world_sim')
-        key = declare_auth(self)
+        self.guard = InputGuard(self, 'world_sim', node.diagnostics_period)
+        key = auth_key(self, node.auth_key_file)
         self.inputs = VerifiedInput(self, self.guard, key, self.ids, WINDOW)
         self.limits = MessageLimits.compute(self.params, len(self.ids))
         self.signer = Signer(key, WORLD_SENDER)
@@ -160,6 +168,13 @@ class WorldSimNode(Node):
         steady_timer(self, 0.02, self._tick)
         self.get_logger().info(
             f'{scenario.name}: {len(self.ids)} agents, {self.total_steps} steps, {clock} clock')
+
+    def _retune(self, params: SatParams, settings: WorldNodeParams):
+        """Take a live change (LIVE): the radio and the world gate the next message with it."""
+        self.params, self.settings = params, settings
+        self.world.params = params
+        self.radio.comm_range = params.cooperation.comm_range
+        self.radio.loss = settings.radio.loss
 
     # -- start-up ---------------------------------------------------------------------------
 
@@ -216,7 +231,8 @@ class WorldSimNode(Node):
         elif now >= self._deadline:
             silent = sorted(i for i in self.active if not self._answered(i))
             self.get_logger().warning(
-                f'step {self.world.step}: agents {silent} silent for {self.agent_timeout} s: '
+                f'step {self.world.step}: agents {silent} silent for '
+                f'{self.settings.agent_timeout} s: '
                 'marked inactive, they hold position')
             self.active -= set(silent)
             self._finish_step()
@@ -251,7 +267,7 @@ class WorldSimNode(Node):
         truth = self.world.truth()
         self.step_pub.publish(self._step_msg(k, finished=False), k)
         self.truth_pub.publish(self._truth_msg(k, poses, truth), k)
-        if views_due(k, self._last_view_step, self.dt, self.view_rate):
+        if views_due(k, self._last_view_step, self.dt, self.settings.view_rate):
             self._last_view_step = k
             self.markers_pub.publish(views.truth_markers(
                 truth.ids, truth.states[:, POSITION], poses,
@@ -266,7 +282,7 @@ class WorldSimNode(Node):
         self._reports = {i: set() for i in self.ids}
         now = time.monotonic()
         if lock_step:
-            self._deadline = now + self.agent_timeout
+            self._deadline = now + self.settings.agent_timeout
         else:
             # A fixed schedule, step k ending at start + k T: timing from now would stretch
             # every period by the time publishing took. A world that fell a whole period
