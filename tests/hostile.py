@@ -16,7 +16,7 @@ from typing import Dict, List, Optional
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
-from ros_harness import executable, PARAMS, started, write_scenario
+from ros_harness import announce, executable, PARAMS, spin_until, started, write_scenario
 import yaml
 
 from sat_agent.message_auth import create_key_file, Signer
@@ -112,6 +112,25 @@ def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[
     with ExitStack() as stack:
         yield {name: stack.enter_context(started(command, tmp_path / f'{name}.log'))
                for name, command in commands.items()}
+
+
+def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_file: Path,
+                 targets, watch, observers=('metrics',)) -> Dict[str, int]:
+    """Run signed_swarm to its end under attack; return each process's exit code.
+
+    targets: (topic, type, qos) of every attack's writer, matched before the run starts;
+    watch(processes): the test's subscriptions (its captures, which time the attacks).
+    Diagnostics come every 0.1 s, so the last counters are seen before the nodes exit.
+    """
+    with signed_swarm(tmp_path, scenario, steps, key_file, observers=observers,
+                      extra=('-p', 'diagnostics_period:=0.1')) as processes:
+        watched = watch(processes)
+        spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets), 60,
+                   "the attacks' writers matched", processes.values())
+        announce(node, watched)
+        spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 240,
+                   'the attacked run ended', processes.values())
+        return {name: p.poll() for name, p in processes.items()}
 
 
 def new_key(tmp_path: Path) -> Path:

@@ -16,10 +16,10 @@ import zlib
 
 from geometry_msgs.msg import Point
 from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
-                     read_metrics, RELIABLE, signed_swarm)
+                     read_metrics, RELIABLE, run_attacked)
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from ros_harness import announce, ros_node, spin_until
+from ros_harness import ros_node
 from test_attack_swarm import genuine_scan, scan_step, without_dropped
 from test_swarm_ros import inprocess_metrics
 
@@ -32,10 +32,15 @@ pytestmark = pytest.mark.ros
 STEPS = 30
 OBSERVERS = ('metrics', 'recorder', 'logger')
 FUTURE_STATUSES = 100
-BURST = 300
+# Below the readers' history (qos.DEPTH, 200): a burst on a topic larger than that, faster than
+# an observer takes it, pushes genuine samples out of the observer's DDS queue before any check
+# can run (seen under full-suite load with 300: one status of agent 1 lost). See README.
+BURST = 100
 # Memory an observer may gain while attacked (its own steps' messages grow it a little).
 MAX_GROWTH_KB = 40_000
 NEVER = 2 ** 32 - 1
+# 16 MB of zeros in 16 kB of zlib, made once: the attack must be sent at once, not after it.
+ZLIB_BOMB = zlib.compress(bytes(16 << 20), 9)
 
 
 def hwm_kb(pid: int) -> int:
@@ -98,17 +103,23 @@ class Attacker:
 
     def on_agent_2(self, topic, msg_type, data):
         """Insider bombs signed as agent 2 right after its own message of step k."""
-        k = deserialize_message(data, msg_type).step
+        genuine = deserialize_message(data, msg_type)
+        k = genuine.step
         if (topic, k) in self.insider_done or k not in (7, 10):
             return
         self.insider_done.add((topic, k))
         if msg_type is SearchDensity and k == 7:
             bomb = SearchDensity(agent_id=2, step=k,
                                  grid=GridInfo(resolution=1.0, width=NEVER, height=NEVER),
-                                 values_zlib=array('B', zlib.compress(bytes(16 << 20), 9)))
-            self.hostile.send(topic, SearchDensity, forge(bomb, topic, k, 2, self.key,
-                                                          relayed=True))
-            self.sent['grid_mismatch'] += 1
+                                 values_zlib=array('B', ZLIB_BOMB))
+            # Counter just above agent 2's message of step 7, below its next one: the bomb never
+            # makes agent 2's next density a "replay". An observer that has that next one
+            # already refuses the bomb as replayed, else for its grid (counted as either).
+            after = genuine.auth.counter + 1
+            insider = Signer(self.key, 2, MonotonicCounter(lambda: after))
+            self.hostile.send(topic, SearchDensity, insider.sign(
+                topic, serialize_message(bomb), k, relayed=True))
+            self.sent['grid_mismatch|replayed'] += 1
         if msg_type is AgentStatus and k == 10:
             for ahead in range(FUTURE_STATUSES):
                 future = AgentStatus(agent_id=2, step=k + 10 + ahead)
@@ -132,24 +143,23 @@ def attacked(tmp_path_factory):
                    ('/agent_1/status', AgentStatus, RELIABLE),
                    ('/agent_2/status', AgentStatus, RELIABLE),
                    (density, SearchDensity, RELIABLE)]
-        with signed_swarm(tmp_path, scenario, STEPS, key_file, observers=OBSERVERS,
-                          extra=('-p', 'diagnostics_period:=0.1')) as processes:
+        attackers = []
+
+        def watch(processes):
             attacker = Attacker(hostile, key, processes)
-            watched = [
-                hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
-                                lambda data: genuine_scan(data, key)
-                                and attacker.on_scan(scan_step(data))),
-                hostile.capture(density, SearchDensity, RELIABLE,
-                                lambda data: attacker.on_agent_2(density, SearchDensity, data)),
-                hostile.capture('/agent_2/status', AgentStatus, RELIABLE,
-                                lambda data: attacker.on_agent_2('/agent_2/status',
-                                                                 AgentStatus, data))]
-            spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets), 60,
-                       "the attacks' writers matched", processes.values())
-            announce(node, watched)
-            spin_until(node, lambda: all(p.poll() is not None for p in processes.values()),
-                       240, 'the attacked run ended', processes.values())
-            codes = {name: p.poll() for name, p in processes.items()}
+            attackers.append(attacker)
+            return [hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
+                                    lambda data: genuine_scan(data, key)
+                                    and attacker.on_scan(scan_step(data))),
+                    hostile.capture(density, SearchDensity, RELIABLE,
+                                    lambda data: attacker.on_agent_2(density, SearchDensity,
+                                                                     data)),
+                    hostile.capture('/agent_2/status', AgentStatus, RELIABLE,
+                                    lambda data: attacker.on_agent_2('/agent_2/status',
+                                                                     AgentStatus, data))]
+        codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch,
+                             OBSERVERS)
+        attacker = attackers[0]
     return read_metrics(tmp_path), inprocess_metrics(scenario), attacker, diagnostics, codes
 
 
@@ -168,9 +178,10 @@ def test_forged_finished_and_truth_change_nothing(attacked):
 
 def test_every_observer_counts_each_attack_under_its_reason(attacked):
     metrics, _, attacker, diagnostics, _ = attacked
-    for reason, sent in attacker.sent.items():
-        assert metrics['dropped'].get(reason, 0) >= sent, reason
-        assert diagnostics.dropped('/logger', reason) >= sent, reason
+    for reasons, sent in attacker.sent.items():
+        reasons = reasons.split('|')
+        assert sum(metrics['dropped'].get(r, 0) for r in reasons) >= sent, reasons
+        assert sum(diagnostics.dropped('/logger', r) for r in reasons) >= sent, reasons
     # The recorder deserializes nothing but /world/step: signatures and sizes only.
     for reason in ('unsigned', 'malformed', 'too_large', 'out_of_window'):
         assert diagnostics.dropped('/recorder', reason) >= attacker.sent[reason], reason

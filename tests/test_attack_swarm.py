@@ -15,10 +15,10 @@ from collections import Counter
 
 from geometry_msgs.msg import Point
 from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
-                     read_metrics, RELIABLE, signed_swarm)
+                     read_metrics, RELIABLE, run_attacked)
 import pytest
 from rclpy.serialization import deserialize_message
-from ros_harness import announce, ros_node, spin_until
+from ros_harness import ros_node
 from test_swarm_ros import inprocess_metrics
 
 from sat_agent.message_auth import (AuthError, load_key, MessageVerifier, Signer, StepWindow,
@@ -102,27 +102,21 @@ def attacked(tmp_path_factory):
     with ros_node('hostile') as node:
         hostile = Hostile(node)
         diagnostics = Diagnostics(node)
-        watched = [
-            hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
-                            lambda data: genuine_scan(data, key)
-                            and attack(hostile, sent, scan_step(data), key)),
-            hostile.capture('/agent_1/cmd', ControlCommand),
-            hostile.capture(radio_topic(2, 'out', 'mode'), AgentMode),
-            hostile.capture(radio_topic(1, 'in', 'mode'), AgentMode),
-            hostile.capture('/world/step', WorldStep, LATCHED)]
+
+        def watch(_):
+            return [hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
+                                    lambda data: genuine_scan(data, key)
+                                    and attack(hostile, sent, scan_step(data), key)),
+                    hostile.capture('/agent_1/cmd', ControlCommand),
+                    hostile.capture(radio_topic(2, 'out', 'mode'), AgentMode),
+                    hostile.capture(radio_topic(1, 'in', 'mode'), AgentMode),
+                    hostile.capture('/world/step', WorldStep, LATCHED)]
         # Every topic the attacks publish on is matched before world_sim starts step 1.
         targets = [('/agent_1/cmd', ControlCommand, RELIABLE),
                    ('/agent_1/measurements', MeasurementSet, RELIABLE),
                    (radio_topic(1, 'in', 'mode'), AgentMode, RELIABLE),
                    ('/world/step', WorldStep, LATCHED)]
-        with signed_swarm(tmp_path, scenario, STEPS, key_file,
-                          extra=('-p', 'diagnostics_period:=0.1')) as processes:
-            spin_until(node, lambda: all(hostile.publisher_ready(*t) for t in targets), 60,
-                       "the attacks' writers matched", processes.values())
-            announce(node, watched)
-            spin_until(node, lambda: all(p.poll() is not None for p in processes.values()),
-                       180, 'the attacked run ended', processes.values())
-            codes = {name: p.poll() for name, p in processes.items()}
+        codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch)
     assert codes == dict.fromkeys(codes, 0), codes
     return read_metrics(tmp_path), inprocess_metrics(scenario), sent, diagnostics
 
