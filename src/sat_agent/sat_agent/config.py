@@ -10,7 +10,9 @@ Two kinds of departure from the paper, kept apart:
 
 - *Additions*: behaviour the paper does not have. Each is one bool of ``AdditionsParams``
   (group ``additions``) and one module of ``sat_agent/beyond_paper/``; ``config/paper.yaml``
-  switches them all on, ``config/paper_strict.yaml`` all off. Their numeric tunables (e.g.
+  switches the detection chain's on, ``config/paper_strict.yaml`` all off, and
+  ``config/persistent.yaml`` adds persistent search-and-track (regrowing density, persistent
+  planning, search while tracking, track release) to paper.yaml's. Their numeric tunables (e.g.
   ``search.investigate_steps``) tune an addition but cannot switch it off on their own.
 - *Interpretations*: where the paper is silent or a literal reading cannot run, the simplest
   reading, in both profiles, no switch (each is stated where it is implemented, too):
@@ -257,6 +259,10 @@ class SearchParams:
     # tentative peak: enough for confirm_scans more scans from a stand-off, short enough to keep
     # the search going.
     investigate_steps: int = 4
+    # Addition additions.persistent_planning: every agent in SEARCH replans (jointly with the
+    # searching agents in range) at the steps k that are multiples of this (>= 1), so plans
+    # follow the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
+    replan_period: int = 10
     # How a searching agent moves: 'sat' is the paper's (closed walks over the search map,
     # joint plans in range); 'lawnmower' and 'random_walk' are the evaluation's baselines
     # (search_baselines.py). The filter, tracking and mode machine are the same for all.
@@ -272,6 +278,7 @@ class SearchParams:
         _check(f'{prefix}.unvisited_threshold', self.unvisited_threshold, 0, 1, high_open=True)
         _check(f'{prefix}.revisit_share', self.revisit_share, 0, 1, low_open=True)
         _check(f'{prefix}.investigate_steps', self.investigate_steps, 1, 10000)
+        _check(f'{prefix}.replan_period', self.replan_period, 1, 10000)
         _choice(f'{prefix}.policy', self.policy, SEARCH_POLICIES)
         _choice(f'{prefix}.planner', self.planner, SEARCH_PLANNERS)
 
@@ -301,6 +308,9 @@ class CooperationParams:
     # once in the next square.
     track_standoff: float = 3.0
     track_edge_margin: float = 1.5
+    # Addition additions.search_while_tracking: epsilon, the share of the best Renyi divergence
+    # (Eqn. track_control) a tracking agent may give up to cover search worth, in [0, 1).
+    track_search_tolerance: float = 0.1
 
     def validate(self, prefix='cooperation'):
         _check(f'{prefix}.comm_range', self.comm_range, 0, INF)
@@ -312,6 +322,8 @@ class CooperationParams:
         _check(f'{prefix}.rejoin_cooldown', self.rejoin_cooldown, 1, 10000)
         _check(f'{prefix}.track_standoff', self.track_standoff, 0, INF, low_open=True)
         _check(f'{prefix}.track_edge_margin', self.track_edge_margin, 0, INF)
+        _check(f'{prefix}.track_search_tolerance', self.track_search_tolerance, 0, 1,
+               high_open=True)
 
 
 @dataclass(frozen=True)
@@ -319,7 +331,9 @@ class AdditionsParams:
     """Switches of the additions to the paper (module docstring; one module each in beyond_paper/).
 
     True is config/paper.yaml (our detection chain), False is the paper as written
-    (config/paper_strict.yaml). Each switch is the only way to turn its addition off.
+    (config/paper_strict.yaml); the persistent search-and-track additions (the last four) are
+    False in both and True in config/persistent.yaml. Each switch is the only way to turn its
+    addition off.
     """
 
     # Per-peak counting with track continuity instead of n-hat = round(PHD mass in the sensing
@@ -361,6 +375,23 @@ class AdditionsParams:
     # A walk drops the nodes whose fused search value shows another agent searched them since
     # the plan, instead of visiting them again (beyond_paper/drop_searched_nodes.py).
     drop_searched_nodes: bool = True
+    # Beyond the paper, off here and on in config/persistent.yaml (issue 15):
+    # The search density regrows as the filter's model says targets can appear: an unobserved
+    # cell's value is P(no undetected target there now), predicted with the uniform birth
+    # intensity, p_S and the NCV motion, corrected with p_D, instead of a constant J
+    # (beyond_paper/regrowing_density.py).
+    regrowing_density: bool = False
+    # Walks collect the nodes' worth (expected undetected targets) per distance over the whole
+    # mission, replanned jointly every search.replan_period steps, instead of path-cheapest-arc
+    # over V-bar = {p <= beta} (beyond_paper/persistent_planning.py).
+    persistent_planning: bool = False
+    # A tracking agent takes, among the actions scoring at least (1 - epsilon) of the best
+    # Renyi divergence (epsilon = cooperation.track_search_tolerance), the one whose next
+    # square holds the most search worth (beyond_paper/search_while_tracking.py).
+    search_while_tracking: bool = False
+    # A tracking agent with several targets leaves out of its tracking control the ones a
+    # neighbour in range tracks with a tighter estimate (beyond_paper/track_release.py).
+    track_release: bool = False
 
     def validate(self, prefix='additions'):
         for item in fields(self):
