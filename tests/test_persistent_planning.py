@@ -42,19 +42,24 @@ def _planned(params=PERSISTENT, worth=None):
     return planner
 
 
-def test_every_node_is_planned_and_the_plan_is_remade_every_replan_period():
+def test_every_node_is_planned_and_joint_plans_are_remade_every_replan_period():
     planner = _planned()
     assert sorted(planner.walk) == list(range(MAP.size))      # no threshold, no fallback
     period = PERSISTENT.search.replan_period
-    reasons = [planner.needs_replan(frozenset({1}), False, step=k) for k in range(2, 3 * period)]
-    assert [k for k, r in zip(range(2, 3 * period), reasons) if r] == [period, 2 * period]
+    steps = range(2, 3 * period)
+    # Alone, the agent keeps its walk (replanning it from wherever it is leaves stragglers).
+    assert not any(planner.needs_replan(frozenset({1}), False, step=k) for k in steps)
+    planner.plan(1, {1: (10.0, 60.0), 2: (60.0, 10.0)}, np.ones(MAP.size))
+    reasons = [planner.needs_replan(frozenset({1, 2}), False, step=k) for k in steps]
+    assert [k for k, r in zip(steps, reasons) if r] == [period, 2 * period]
     assert set(reasons) == {ReplanReason.NONE, ReplanReason.PERIODIC}
     # The paper's planner (the switch off) never replans on the clock.
     off = PERSISTENT.with_overrides({'additions.persistent_planning': False})
     paper = SearchPlanner(MAP, off)
     paper.needs_replan(frozenset({1}), False, step=1)
     paper.plan(1, {1: (10.0, 60.0)}, np.zeros(MAP.size))
-    assert not any(paper.needs_replan(frozenset({1}), False, step=k) for k in range(2, 40))
+    paper.plan(1, {1: (10.0, 60.0), 2: (60.0, 10.0)}, np.zeros(MAP.size))
+    assert not any(paper.needs_replan(frozenset({1, 2}), False, step=k) for k in steps)
 
 
 def test_a_node_whose_worth_fell_by_half_was_searched_by_someone_else():
@@ -82,3 +87,19 @@ def _revisit_gaps(params, steps: int, start=(10.0, 60.0)) -> np.ndarray:
         last[seen] = k
         pose = candidate_poses(pose, params.actions)[out.action]
     return np.maximum(gaps, steps + 1 - last)
+
+
+def test_a_lone_agent_with_no_target_revisits_every_node_within_two_sweeps():
+    # The derivation: one step after a visit a node's worth is >= its cells' births b > 0
+    # (beyond_paper/regrowing_density.py), so every plan holds every node out of view. A lone
+    # agent replans when its walk is exhausted, so a node is seen again at the latest by the
+    # end of the next walk; a walk through the |V| nodes, one spacing s apart, flown at the
+    # top speed v = N_R Delta_R, takes |V| s / v steps (250 here): horizon 2 |V| s / v.
+    params = PERSISTENT
+    speed = params.actions.n_radial * params.actions.radial_step
+    sweep = MAP.size * MAP.spacing / speed
+    assert np.max(_revisit_gaps(params, int(3 * sweep))) <= 2 * sweep
+    # The paper's density and planner (config/paper.yaml) sweep once, then wait for J to
+    # bring nodes below beta (or revisit the least searched half): some wait far longer.
+    paper = load_params_file('config/paper.yaml')
+    assert np.max(_revisit_gaps(paper, int(3 * sweep))) > 2 * sweep

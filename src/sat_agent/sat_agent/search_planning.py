@@ -180,6 +180,8 @@ class NoClaims:
         """Return every node: all are free."""
         return nodes
 
+    free = unclaimed
+
 
 def own_visits_only(values: np.ndarray, planned: Optional[np.ndarray],
                     beta: float) -> np.ndarray:
@@ -197,6 +199,7 @@ class ReplanReason(enum.IntEnum):
     NEW_NEIGHBOUR = 4  # first contact with a searching agent outside the plan's group
     EXHAUSTED = 5      # every node of the own walk is visited
     PERIODIC = 6       # additions.persistent_planning: a joint replan at every replan_period
+    DECAYED = 7        # additions.persistent_planning: the walk collects too little worth
 
 
 class SearchPlanner:
@@ -294,17 +297,23 @@ class SearchPlanner:
             reason = ReplanReason.RELEASED
         elif not frozenset(group) <= self._group:
             reason = ReplanReason.NEW_NEIGHBOUR
-        elif self._periodic(step):
+        elif self._periodic(step, frozenset(group)):
             reason = ReplanReason.PERIODIC
         elif not self._walk.size:
             reason = ReplanReason.EXHAUSTED
+        elif self._decayed():
+            reason = ReplanReason.DECAYED
         else:
             reason = ReplanReason.NONE
         self._reason = reason
         return reason
 
-    def _periodic(self, step: int) -> bool:
-        """Whether step is due for a periodic replan: never in the paper."""
+    def _periodic(self, step: int, group: frozenset) -> bool:
+        """Whether step is due for a periodic replan with group: never in the paper."""
+        return False
+
+    def _decayed(self) -> bool:
+        """Whether the walk's value has decayed: never in the paper (J only lowers values)."""
         return False
 
     def node_values(self, density: SearchDensity) -> np.ndarray:
@@ -325,7 +334,7 @@ class SearchPlanner:
         if values.size != self._map.size:
             raise ValueError(f'{values.size} search values for {self._map.size} nodes')
         own_start = _point(starts[own_id])
-        if self._reason == ReplanReason.EXHAUSTED:
+        if self._reason in (ReplanReason.EXHAUSTED, ReplanReason.DECAYED):
             self._plan_alone(own_id, own_start, values)
         else:
             walks = planned_walks(starts, self._map.centers, self._nodes_to_search(values),

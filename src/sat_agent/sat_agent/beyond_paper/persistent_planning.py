@@ -39,13 +39,16 @@ import numpy as np
 
 from sat_agent.config import SatParams
 from sat_agent.search_density import SearchDensity
-from sat_agent.search_map import SearchMap
-from sat_agent.search_planning import own_visits_only, SearchPlanner
+from sat_agent.search_map import nodes_in_view, SearchMap
+from sat_agent.search_planning import _costs, MIN_COST, own_visits_only, SearchPlanner
 
 # A scan removes p_D = 99 % of the undetected mass it covers; a node whose worth fell below
 # half of its planned worth was mostly covered by someone's square since (its worth only
 # grows otherwise, up to the mass that dies or walks out).
 DROPPED_SHARE = 0.5
+# A walk has decayed when its next node pays (worth per metre from the pose) less than half of
+# what the best node out of view and unclaimed would: a new walk alone then pays twice as much.
+DECAYED_SHARE = 0.5
 
 
 def every_node(node_worth: np.ndarray) -> np.ndarray:
@@ -69,6 +72,7 @@ class PersistentPlanner(SearchPlanner):
 
     def __init__(self, search_map: SearchMap, params: SatParams):
         super().__init__(search_map, params)
+        self._latest = (None, None)
         self._period = int(params.search.replan_period)
         self._nodes_to_search = every_node
         self._searched_meanwhile = (worth_dropped if params.additions.drop_searched_nodes
@@ -78,8 +82,27 @@ class PersistentPlanner(SearchPlanner):
         """Each node's worth: the expected undetected targets in its region."""
         return density.node_worth(self._map.centers, self._map.spacing)
 
-    def _periodic(self, step: int) -> bool:
-        return step % self._period == 0
+    def mark_visited(self, pose, node_values=None) -> np.ndarray:
+        """SearchPlanner.mark_visited; remembers pose and worth for the decay test."""
+        self._latest = (np.asarray(pose, dtype=float), node_values)
+        return super().mark_visited(pose, node_values)
+
+    def _periodic(self, step: int, group: frozenset) -> bool:
+        return step % self._period == 0 and len(group) > 1
+
+    def _decayed(self) -> bool:
+        """Whether the next node pays less than DECAYED_SHARE of the best rate (docstring)."""
+        pose, worth = self._latest
+        if worth is None or not self._walk.size:
+            return False
+        worth = np.asarray(worth, dtype=float).reshape(-1)
+        in_view = nodes_in_view(self._map, pose, self._params.sensor.square_side)
+        nodes = self._claims.free(np.setdiff1d(every_node(worth), in_view))
+        rates = worth[nodes] / np.maximum(_costs(pose, self._map.centers[nodes]), MIN_COST)
+        next_node = self._walk[:1]
+        rate = worth[next_node] / np.maximum(_costs(pose, self._map.centers[next_node]),
+                                             MIN_COST)
+        return bool(rate[0] < DECAYED_SHARE * rates.max(initial=0.0))
 
     def _nodes_out_of_view(self, node_values: np.ndarray, in_view: np.ndarray) -> np.ndarray:
         return np.setdiff1d(every_node(node_values), in_view)
