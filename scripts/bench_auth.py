@@ -31,8 +31,8 @@ from sat_agent.agent_core import REPORT_KINDS  # noqa: E402
 from sat_agent.config import load_params_file  # noqa: E402
 from sat_agent.message_auth import (BLOCK_BYTES, MessageVerifier, Signer,  # noqa: E402
                                     StepWindow, WORLD_SENDER)
-from sat_agent.msg_conversions import (measurements_to_msg, point,  # noqa: E402
-                                       report_to_msgs)
+from sat_agent.ros.msg_conversions import (measurements_to_msg, point,  # noqa: E402
+                                           report_to_msgs)
 from sat_msgs.msg import AgentStatus  # noqa: E402
 from sat_world_sim.inprocess_swarm import InProcessSwarm  # noqa: E402
 from sat_world_sim.scenario import load_scenario  # noqa: E402
@@ -55,7 +55,8 @@ def paper_reports(steps: int, at):
         swarm.step()
         if k in at:
             reports[k] = dict(zip(REPORT_KINDS,
-                                  report_to_msgs(swarm.last_outputs[1].report, lattice)))
+                                  report_to_msgs(swarm.last_outputs[1].report, lattice,
+                                                 params.motion.dt)))
     return reports
 
 
@@ -119,7 +120,8 @@ def main(argv=None) -> int:
     cases.append(('status (300 particles)', status(rng), False))
     for n in (10, 100, 1000):
         z = np.column_stack([rng.uniform(0, 10, n), rng.uniform(-np.pi, np.pi, n)])
-        cases.append((f'scan of {n} detections', measurements_to_msg(1, 5, (50, 50), z), False))
+        cases.append((f'scan of {n} detections', measurements_to_msg(1, 5, (50, 50), z, 1.0),
+                      False))
     columns = ('serialize', 'deserialize', 'sign', 'verify', 'seal', 'verify_delivery')
     print(f"{'message':28s} {'bytes':>6s} " + ' '.join(f'{c:>15s}' for c in columns)
           + '   sign/ser verify/ser')

@@ -15,6 +15,8 @@ import sys
 from sat_world_sim import bringup
 
 ROOT = Path(__file__).resolve().parents[1]
+# The run's files, relative to the repository (README's `ros2 run` lines use them as they are).
+PAPER_ARGS = ('--scenario', 'config/scenarios/paper.yaml', '--params', 'config/paper.yaml')
 
 
 def main() -> int:
@@ -23,10 +25,8 @@ def main() -> int:
                         help='run directory name under runs/ (default: paper-<UTC time>)')
     args, rest = parser.parse_known_args()
     name = args.name or datetime.now(timezone.utc).strftime('paper-%Y%m%d-%H%M%S')
-    return bringup.main([
-        '--scenario', str(ROOT / 'config' / 'scenarios' / 'paper.yaml'),
-        '--params', str(ROOT / 'config' / 'paper.yaml'),
-        '--run-dir', str(ROOT / 'runs' / name), *rest])
+    files = [arg if arg.startswith('--') else str(ROOT / arg) for arg in PAPER_ARGS]
+    return bringup.main([*files, '--run-dir', str(ROOT / 'runs' / name), *rest])
 
 
 if __name__ == '__main__':

@@ -101,7 +101,7 @@ class Watcher:
 
     def __init__(self, swarm: subprocess.Popen, run_dir: Path, sample_every: int):
         import rclpy
-        from sat_agent.qos import WORLD
+        from sat_agent.ros.qos import WORLD
         from sat_msgs.msg import WorldStep
 
         self.rclpy = rclpy

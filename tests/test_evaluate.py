@@ -111,13 +111,13 @@ def test_ablation_cells_follow_the_fields_of_the_additions_group(monkeypatch):
 def test_cells_that_cannot_be_built_yet_are_skipped_with_the_reason(tmp_path):
     (tmp_path / 'paper.yaml').write_text((CONFIG / 'paper.yaml').read_text())
     cells = [default_cell('random'), default_cell('random', 'strict', profile='paper_strict'),
-             default_cell('random', 'Voronoi', policy='phd_voronoi'),
+             default_cell('random', 'spiral', policy='spiral'),
              default_cell('random', 'no-op', overrides=(('search.decay', 0.999),))]
     runnable, skipped = prepare_cells(cells, tmp_path)
     assert [c for c, _ in runnable] == cells[:1]
     reasons = {c.label: reason for c, reason in skipped}
     assert 'paper_strict.yaml does not exist' in reasons['strict']
-    assert "'search.policy' = 'phd_voronoi'" in reasons['Voronoi']
+    assert "'search.policy' = 'spiral'" in reasons['spiral']
     assert 'already so' in reasons['no-op']
     params = runnable[0][1]
     assert (params.sensor.clutter_rate, params.cooperation.comm_range) == (10.0, 50.0)

@@ -10,9 +10,9 @@ import pytest
 import rclpy
 from ros_harness import executable, PARAMS, REPO, run_swarm, started
 
-from sat_agent.qos import STEP, WORLD
+from sat_agent.ros.qos import STEP, WORLD
 from sat_msgs.msg import ControlCommand, WorldStep
-from sat_world_sim.observer import ReadyAnnouncer
+from sat_world_sim.ros.observer import ReadyAnnouncer
 
 pytestmark = pytest.mark.ros
 STEPS = 120

@@ -21,7 +21,7 @@ import rclpy
 from ros_harness import executable, PARAMS, started, write_scenario
 
 from sat_agent.density_codec import encode_density
-from sat_agent.qos import RADIO, STEP
+from sat_agent.ros.qos import RADIO, STEP
 from sat_msgs.msg import (AgentMode, ControlCommand, MeasurementSet, MultiTargetEstimate,
                           SearchDensity, TargetEstimate)
 from sat_world_sim.records import density_values

@@ -1,7 +1,7 @@
 """InputGuard: each drop is counted; warnings are rate-limited per reason, say what they hid."""
 
-from sat_agent import input_guard
-from sat_agent.input_guard import InputGuard
+from sat_agent.ros import input_guard
+from sat_agent.ros.input_guard import InputGuard
 
 
 class FakeNode:

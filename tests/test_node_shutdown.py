@@ -39,7 +39,7 @@ def test_an_agent_stopped_by_a_signal_exits_0_without_an_error(tmp_path, number)
 SELF_SIGNALLING_NODE = '''
 import os, signal, sys
 from rclpy.node import Node
-from sat_agent.node_runner import run_nodes
+from sat_agent.ros.node_runner import run_nodes
 
 class Node_(Node):
     def __init__(self):

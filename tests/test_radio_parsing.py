@@ -6,8 +6,8 @@ from rclpy.serialization import serialize_message
 
 from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.config import SatParams
-from sat_agent.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
-from sat_agent.radio_parsing import RadioParser
+from sat_agent.ros.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
+from sat_agent.ros.radio_parsing import RadioParser
 
 PARAMS = SatParams()
 
@@ -20,7 +20,7 @@ def report_bytes():
     for k in range(1, 4):
         output = agent.step(k, (50.0, 50.0 + k), rng.uniform((0, -3), (7, 3), (4, 2)), [])
     lattice = agent.filter.search.lattice
-    msgs = report_to_msgs(output.report, lattice)
+    msgs = report_to_msgs(output.report, lattice, PARAMS.motion.dt)
     return lattice, output.report, dict(zip(REPORT_KINDS, map(serialize_message, msgs)))
 
 

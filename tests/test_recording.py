@@ -10,9 +10,10 @@ import rclpy
 from ros_harness import executable
 from rosbags.rosbag2 import Reader
 
-from sat_world_sim.bag_replay import deep
+from sat_agent.ros.msg_conversions import message_class
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.replay_support import message_class, topic_qos
+from sat_world_sim.ros.replay import deep
+from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -108,7 +109,7 @@ def test_republishing_the_bag_delivers_every_message(paper_run):
 
 
 def test_replay_refuses_what_is_not_a_bag(tmp_path):
-    result = subprocess.run([sys.executable, '-m', 'sat_world_sim.bag_replay', str(tmp_path),
+    result = subprocess.run([sys.executable, '-m', 'sat_world_sim.ros.replay', str(tmp_path),
                              '--offline', '--out', str(tmp_path / 'x')],
                             capture_output=True, text=True)
     assert result.returncode == 2 and 'no metadata.yaml' in result.stderr

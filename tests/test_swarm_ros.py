@@ -19,8 +19,8 @@ from sat_agent.config import load_params_file
 from sat_msgs.msg import AgentStatus, SearchDensity, WorldStep
 from sat_world_sim.inprocess_swarm import run_swarm as run_inprocess
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.observer import ReadyAnnouncer
 from sat_world_sim.records import density_values
+from sat_world_sim.ros.observer import ReadyAnnouncer
 from sat_world_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.ros

@@ -13,6 +13,9 @@ setup(
         (f'share/{PACKAGE}', ['package.xml']),
     ],
     install_requires=['setuptools'],
+    # colcon test: pytest (it finds nothing here; the suite runs from sat_world_sim, whose
+    # test/ is the repository's tests/) instead of the deprecated `setup.py test`.
+    extras_require={'test': ['pytest']},
     zip_safe=True,
     maintainer='sat-swarm maintainers',
     maintainer_email='maintainers@sat-swarm.org',
@@ -20,8 +23,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'agent = sat_agent.agent_node:main',
-            'agents_composed = sat_agent.agent_node:main_composed',
+            'agent = sat_agent.ros.agent_node:main',
+            'agents_composed = sat_agent.ros.agent_node:main_composed',
         ],
     },
 )

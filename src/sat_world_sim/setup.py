@@ -19,6 +19,9 @@ setup(
         (f'share/{PACKAGE}/config/scenarios', glob('../../config/scenarios/*.yaml')),
     ],
     install_requires=['setuptools'],
+    # `colcon test` runs pytest here when a package asks for it: test/ is the repository's
+    # tests/ (a symlink), so colcon test and make test run one suite under one pytest.ini.
+    extras_require={'test': ['pytest']},
     zip_safe=True,
     maintainer='sat-swarm maintainers',
     maintainer_email='maintainers@sat-swarm.org',
@@ -28,12 +31,12 @@ setup(
         'console_scripts': [
             'evaluate = sat_world_sim.evaluate:main',
             'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
-            'logger = sat_world_sim.logger_node:main',
-            'metrics = sat_world_sim.metrics_node:main',
-            'recorder = sat_world_sim.recorder_node:main',
-            'replay = sat_world_sim.bag_replay:main',
+            'logger = sat_world_sim.ros.logger_node:main',
+            'metrics = sat_world_sim.ros.metrics_node:main',
+            'recorder = sat_world_sim.ros.recorder_node:main',
+            'replay = sat_world_sim.ros.replay:main',
             'swarm = sat_world_sim.bringup:main',
-            'world_sim = sat_world_sim.world_sim_node:main',
+            'world_sim = sat_world_sim.ros.world_sim_node:main',
         ],
     },
 )

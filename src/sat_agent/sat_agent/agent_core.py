@@ -18,7 +18,8 @@
    control (Eqn. track_control) on the predicted PHD and the predicted multi-target state
    X-hat_{k+1|k} in TRACK; with additions.investigation, a searching agent may instead look at
    a tentative peak with the tracking control, or keep a newborn spot in its next square
-   (beyond_paper/investigation.py);
+   (beyond_paper/investigation.py). A baseline of ``search.policy`` (baselines/) replaces the
+   search control, or the whole control (PHD-Voronoi, Thompson sampling);
 7. publish the report of step k: search density, multi-target estimate, mode (what the paper
    exchanges) with agent id, step and pose as header.
 
@@ -47,6 +48,8 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 from sat_agent.actions import candidate_poses
+from sat_agent.baselines import baseline_policy
+from sat_agent.baselines.interface import BaselineView
 from sat_agent.beyond_paper.investigation import (
     Investigation, keep_in_view_action, Look, NO_LOOK)
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
@@ -56,7 +59,6 @@ from sat_agent.config import SatParams
 from sat_agent.density_codec import encode_density
 from sat_agent.mode_machine import Mode, ModeMachine
 from sat_agent.phd_filter import BirthSpots, SatPhdFilter
-from sat_agent.search_baselines import baseline_policy
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import SearchMap
 from sat_agent.search_planning import ReplanReason, SearchPlanner
@@ -170,7 +172,8 @@ class Agent:
     """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
 
     Same constructor arguments and same step inputs give the same outputs: the only randomness
-    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id).
+    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id), and a
+    random baseline's, seeded with (seed, agent_id, its stream) (baselines/interface.py).
     """
 
     def __init__(self, agent_id: int, params: SatParams, initial_pose, seed: int = 0):
@@ -184,10 +187,9 @@ class Agent:
         self.search_map = SearchMap.for_area(params.area, params.search.node_spacing)
         self.planner = (PersistentPlanner if additions.persistent_planning
                         else SearchPlanner)(self.search_map, params)
-        # The evaluation's baselines (search.policy); None for the paper's closed walks.
+        # The evaluation's baselines (search.policy, baselines/); None for the paper's policy.
         self.baseline = baseline_policy(params, self.search_map, self.agent_id, initial_pose,
                                         seed)
-        self._searcher = self.planner if self.baseline is None else self.baseline
         self.modes = ModeMachine(params)
         self.overlap = OverlapMonitor(params)
         self.tracking = TrackingControl(params)
@@ -234,31 +236,36 @@ class Agent:
         report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
                              self.filter.search.values.astype(np.float32), estimate)
         self.filter.predict(pose)
-        action, goal, plan = self._control(mode, pose, estimate, reports)
+        view = BaselineView(int(step), self.filter.targets, report, tuple(reports))
+        action, goal, plan = self._control(mode, pose, estimate, view)
         self._last_report = report
         return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
                            mode, leaving_for, replan)
 
     def _control(self, mode: Mode, pose: np.ndarray, estimate: MultiTargetEstimate,
-                 reports: Sequence[AgentReport]):
+                 view: BaselineView):
         """Return (action, goal, plan) of step k, on the PHD predicted to k+1.
 
-        TRACK, or a look at tentative peaks from SEARCH: the tracking control on X-hat_{k+1|k}
-        (the looked-at peaks; in SEARCH the walk is kept for later; in TRACK without the
-        targets released to a neighbour, additions.track_release). Otherwise the search move
-        (walk or baseline), kept to hold a newborn spot in view when the look asks it.
+        A baseline that steers tracking too is the whole controller. Otherwise, TRACK or a look
+        at tentative peaks from SEARCH: the tracking control on X-hat_{k+1|k} (the looked-at
+        peaks; in SEARCH the walk is kept for later; in TRACK without the targets released to a
+        neighbour, additions.track_release); else the search move (walk or baseline), kept to
+        hold a newborn spot in view when the look asks it.
         """
+        if self.baseline is not None and self.baseline.steers_tracking:
+            return self.baseline.choose(pose, view)
         look = self.investigation.look(mode, estimate, self.modes.cooldown_left,
                                        self.filter.birth_spots)
         if mode == Mode.TRACK or look.peaks is not None:
             targets = look.peaks if mode == Mode.SEARCH else self.release.keep(
                 self.extractor.estimate(self.filter.targets, pose)[0], self._last_report,
-                reports)
+                view.reports)
             action, _ = self.tracking.action(self.filter.targets, targets, pose,
                                              self.filter.search)
             plan = self.planner.walk_points() if mode == Mode.SEARCH else np.zeros((0, 2))
             return action, candidate_poses(pose, self.params.actions)[action], plan
-        action, goal, plan = self._searcher.choose(pose)
+        action, goal, plan = (self.planner.choose(pose) if self.baseline is None
+                              else self.baseline.choose(pose, view))
         if look.keep is not None:
             action = keep_in_view_action(pose, goal, self.params, look.keep)
         return action, goal, plan

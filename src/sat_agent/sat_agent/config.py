@@ -73,7 +73,7 @@ def _check(key: str, value: Any, low: float, high: float, *, low_open=False, hig
 
 
 INF = math.inf
-SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk')
+SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk', 'phd_voronoi', 'thompson')
 SEARCH_PLANNERS = ('greedy', 'ortools')
 
 
@@ -263,9 +263,11 @@ class SearchParams:
     # searching agents in range) at the steps k that are multiples of this (>= 1), so plans
     # follow the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
     replan_period: int = 10
-    # How a searching agent moves: 'sat' is the paper's (closed walks over the search map,
-    # joint plans in range); 'lawnmower' and 'random_walk' are the evaluation's baselines
-    # (search_baselines.py). The filter, tracking and mode machine are the same for all.
+    # How the agent moves: 'sat' is the paper's (closed walks over the search map, joint plans
+    # in range); the others are the evaluation's baselines (sat_agent/baselines/):
+    # 'lawnmower' and 'random_walk' replace the search moves only, 'phd_voronoi' (Dames 2020)
+    # and 'thompson' (DecSTER, Banerjee and Schneider 2024) the whole controller. The filter,
+    # extraction and mode machine are the same for all.
     policy: str = 'sat'
     # How the 'sat' closed walks are made: 'greedy' is the paper's path-cheapest-arc;
     # 'ortools' improves the greedy walks by OR-Tools local search (routing.py).

@@ -20,8 +20,14 @@ def transition_matrix(dt: float) -> np.ndarray:
 
 
 def process_noise_covariance(dt: float, scale: float = 1.0) -> np.ndarray:
-    """Q of Section Evaluation, times ``scale`` (1 is the paper's model)."""
-    block = np.array([[dt / 3.0, dt / 2.0], [dt / 2.0, dt]])
+    """Q of the near-constant-velocity model, per axis [[T^3/3, T^2/2], [T^2/2, T]] * scale.
+
+    The discretised continuous white-noise acceleration model (Bar-Shalom, Li and Kirubarajan,
+    Sec. 6.2.2) with spectral density ``scale``. The paper writes Q with T/3 and T/2 (Section
+    Evaluation) because its T = 1 s, where both forms agree; at another dt only this one keeps
+    the position variance growing as T^3, so ``motion.dt`` is a real parameter.
+    """
+    block = np.array([[dt ** 3 / 3.0, dt ** 2 / 2.0], [dt ** 2 / 2.0, dt]])
     q = np.zeros((4, 4))
     q[np.ix_([0, 1], [0, 1])] = block
     q[np.ix_([2, 3], [2, 3])] = block

@@ -374,7 +374,7 @@ class SearchPlanner:
     def choose(self, pose):
         """Return (action, goal, plan): the search control towards the walk's next node.
 
-        The same interface as the evaluation's baselines (search_baselines); before any plan
+        The same move as the evaluation's baselines (baselines/); before any plan
         the goal is pose (stay).
         """
         goal = self.next_goal()

@@ -1,54 +1,68 @@
-"""Launch a sat-swarm run on a full ROS 2 Jazzy install (launch/launch_ros are not on PyPI).
+"""Launch a sat-swarm run on a full ROS 2 Jazzy install: the same processes as the bring-up.
 
-    ros2 launch sat_world_sim swarm.launch.py agents:=2 run_dir:=/tmp/run \
-        scenario:=<share>/config/scenarios/paper.yaml
+    ros2 launch sat_world_sim swarm.launch.py run_dir:=runs/launch seed:=1 clock:=lock_step \
+        record:=true view:=file fastdds_profile:=config/fastdds.xml
 
-Starts world_sim, metrics and one agent node per id in 1..agents, each in its own process with
-the same parameter file, exactly as the Python bring-up (`ros2 run sat_world_sim swarm`) does.
-The agent ids must match the scenario's.
+The launch arguments are the bring-up's run options (``ros2 launch ... --show-args`` lists
+them: scenario, params, run_dir, clock, period, agent_timeout, seed, steps, radio_loss,
+radio_delay, composed, respawn, record, view, view_rate, fastdds_profile, domain_id), and the
+processes, their arguments and their environment come from the bring-up's own
+``process_list`` and ``run_env`` (sat_world_sim.bringup): one source of truth, checked by
+tests/test_launch_parity.py. Every process runs with ``use_sim_time`` and the run's seed
+(the scenario's unless ``seed`` is given). The launch ends, like the bring-up, once every
+observer (metrics, recorder, logger) has exited; the agents exit by themselves when the world
+says the run is finished.
+
+``processes(values)`` needs no launch package, so the process list can be checked (and run)
+where launch is not installed.
 """
 
-import os
+from sat_world_sim import bringup
 
-from ament_index_python.packages import get_package_share_directory
-from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, OpaqueFunction
-from launch.substitutions import LaunchConfiguration
-from launch_ros.actions import Node
+
+def processes(values):
+    """Return (processes, extra environment) for launch argument values (name -> string)."""
+    options = bringup.options_from_launch(values)
+    return bringup.load_run(options), bringup.run_env(options.fastdds_profile, options.domain_id)
 
 
 def _nodes(context):
-    share = get_package_share_directory('sat_world_sim')
-    params = LaunchConfiguration('params').perform(context) or os.path.join(
-        share, 'config', 'paper.yaml')
-    scenario = LaunchConfiguration('scenario').perform(context) or os.path.join(
-        share, 'config', 'scenarios', 'paper.yaml')
-    count = int(LaunchConfiguration('agents').perform(context))
-    ids = list(range(1, count + 1))
-    # Fast repair of lost samples (config/fastdds.xml), unless the user names a profile file.
-    env = {'FASTRTPS_DEFAULT_PROFILES_FILE': os.environ.get(
-        'FASTRTPS_DEFAULT_PROFILES_FILE', os.path.join(share, 'config', 'fastdds.xml'))}
-    nodes = [
-        Node(package='sat_world_sim', executable='world_sim', name='world_sim',
-             parameters=[params, {'scenario': scenario, 'observers': 1}], output='screen',
-             additional_env=env),
-        Node(package='sat_world_sim', executable='metrics', name='metrics',
-             parameters=[params, {'run_dir': LaunchConfiguration('run_dir').perform(context),
-                                  'agent_ids': ids}], output='screen', additional_env=env),
-    ]
-    nodes += [Node(package='sat_agent', executable='agent', name='agent',
-                   namespace=f'agent_{i}', parameters=[params, {'agent_id': i}],
-                   output='screen', additional_env=env)
-              for i in ids]
-    return nodes
+    from launch.actions import EmitEvent, RegisterEventHandler
+    from launch.event_handlers import OnProcessExit
+    from launch.events import Shutdown
+    from launch_ros.actions import Node
+
+    values = dict(context.launch_configurations)
+    specs, env = processes(values)
+    nodes = {spec.name: Node(package=spec.package, executable=spec.executable,
+                             arguments=list(spec.arguments),
+                             ros_arguments=list(spec.ros_arguments), respawn=spec.respawn,
+                             additional_env=env, output='screen')
+             for spec in specs}
+    observers = {spec.name for spec in specs if spec.observer}
+    exited = set()
+
+    def on_exit(name, event, _):
+        # As the bring-up's supervise: the run is over when every observer has exited, and
+        # lost when world_sim fails.
+        exited.add(name)
+        if observers <= exited or (name == 'world_sim' and event.returncode != 0):
+            return [EmitEvent(event=Shutdown(reason=f'{name} exited: the run is over'))]
+        return None
+
+    handlers = [RegisterEventHandler(OnProcessExit(
+        target_action=nodes[name],
+        on_exit=lambda event, context, name=name: on_exit(name, event, context)))
+        for name in sorted(observers | {'world_sim'})]
+    return list(nodes.values()) + handlers
 
 
 def generate_launch_description():
+    from launch import LaunchDescription
+    from launch.actions import DeclareLaunchArgument, OpaqueFunction
+
     return LaunchDescription([
-        DeclareLaunchArgument('agents', default_value='2', description='number of agents'),
-        DeclareLaunchArgument('params', default_value='', description='parameter file'),
-        DeclareLaunchArgument('scenario', default_value='', description='scenario file'),
-        DeclareLaunchArgument('run_dir', default_value='runs/launch',
-                              description='where metrics.json and plots go'),
+        *(DeclareLaunchArgument(name, default_value=default, description=description)
+          for name, default, description in bringup.launch_arguments()),
         OpaqueFunction(function=_nodes),
     ])

@@ -1,41 +1,26 @@
-"""Look at a recorded run again: re-publish its bag on a live graph, or turn it into files.
+"""Read a recorded run's bag without ROS, and turn it into metrics, plots and a Rerun file.
 
-Live (needs the ROS 2 environment)::
-
-    replay runs/<name>/bag [--rate 2.0] [--loop] [--topics /world/truth /agent_1/status]
-
-publishes every recorded message (its original CDR bytes) on its topic with the recorded QoS
-profile and the original timing divided by ``--rate``; any subscriber (the logger, a test) sees
-the run again.
-
-Offline (no ROS graph is started)::
+The offline half of the ``replay`` command (sat_world_sim.ros.replay has the command and the live
+re-publishing)::
 
     replay runs/<name>/bag --offline --out runs/<name>-replay [--params config/paper.yaml]
 
 feeds the bag's messages to records.RunCollector, the code the live metrics node runs, and
 writes ``metrics.json`` and ``plots/*.png`` equal to the live run's, and ``run.rrd`` through the
-same Rerun view the live logger uses. The last line printed is the output directory.
+same Rerun view the live logger uses. rosbags reads the bag: no rclpy here.
 """
 
-import argparse
 from pathlib import Path
-import sys
-import time
 from typing import Iterator, List, Optional, Sequence, Tuple
 
-from rclpy.qos import QoSProfile
 from rosbags.rosbag2 import Reader
 
-from sat_agent.config import load_params_file, ParameterError, SatParams
+from sat_agent.config import SatParams
 
 from sat_world_sim import rerun_view
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.records import RunCollector
-from sat_world_sim.topics import agent_of, Topic, world_topics
-
-LATCHED = {t.name for t in world_topics()}
-REPLAY_DEPTH = 1000
-ACK_TIMEOUT_S = 10.0
+from sat_world_sim.records import route, RunCollector
+from sat_world_sim.topics import agent_of
 
 
 def bag_agent_ids(reader: Reader) -> List[int]:
@@ -60,11 +45,18 @@ def raw_messages(reader: Reader, connections) -> Iterator[Tuple[object, int, byt
     yield from reader.messages(connections=connections)
 
 
-def deserialized(bag: Path) -> Iterator[Tuple[str, object]]:
-    """Yield (topic, message) of a bag in time order, deserialised with the sat_msgs types."""
+def deserialized(bag: Path, agent_ids: Optional[Sequence[int]] = None
+                 ) -> Iterator[Tuple[str, object]]:
+    """Yield (topic, message) of a bag in time order, deserialised with the sat_msgs types.
+
+    With agent_ids, only the topics metrics and views read (records.route): a bag also holds
+    the standard views, which they do not need.
+    """
     store = sat_typestore()
     with Reader(bag) as reader:
-        for connection, _, raw in raw_messages(reader, reader.connections):
+        connections = [c for c in reader.connections
+                       if agent_ids is None or route(c.topic, agent_ids) is not None]
+        for connection, _, raw in raw_messages(reader, connections):
             yield connection.topic, store.deserialize_cdr(raw, connection.msgtype)
 
 
@@ -73,120 +65,10 @@ def replay_offline(bag: Path, out: Path, params: SatParams) -> dict:
     with Reader(bag) as reader:
         agent_ids = bag_agent_ids(reader)
     collector = RunCollector(agent_ids)
-    for topic, msg in deserialized(bag):
+    for topic, msg in deserialized(bag, agent_ids):
         collector.add(topic, msg)
     area = (params.area.width, params.area.height)
     metrics = collector.write(out, area)
-    rerun_view.write_rrd(deserialized(bag), out / 'run.rrd', agent_ids, area,
+    rerun_view.write_rrd(deserialized(bag, agent_ids), out / 'run.rrd', agent_ids, area,
                          params.sensor.square_side)
     return metrics
-
-
-def deep(profile):
-    """Copy of a QoS profile with REPLAY_DEPTH history.
-
-    A replay at a high rate publishes in bursts; a reliable writer that keeps only the recorded
-    depth would overwrite samples a slow reader has not acknowledged yet.
-    """
-    return QoSProfile(depth=max(profile.depth, REPLAY_DEPTH), reliability=profile.reliability,
-                      durability=profile.durability)
-
-
-def _wait_for_subscribers(node, publishers, timeout: float):
-    """Spin until every publisher has a subscriber, or timeout seconds.
-
-    DDS drops what is published before a reader matched, so publishing at once would lose the
-    first messages of topics whose subscribers are still being discovered.
-    """
-    end = time.monotonic() + timeout
-    while time.monotonic() < end and any(p.get_subscription_count() == 0 for p in publishers):
-        _spin_for(node, 0.1)
-
-
-def replay_live(bag: Path, rate: float, loop: bool, topics: Optional[Sequence[str]],
-                match_timeout: float = 5.0) -> int:
-    """Publish the bag onto the live graph (module docstring); return the messages sent."""
-    import rclpy
-    from rclpy.duration import Duration
-
-    from sat_world_sim.replay_support import message_class, topic_qos
-
-    rclpy.init()
-    node = rclpy.create_node('bag_replay')
-    sent = 0
-    try:
-        with Reader(bag) as reader:
-            connections = selected(reader, topics)
-            publishers = {c.id: node.create_publisher(
-                message_class(c.msgtype), c.topic,
-                deep(topic_qos(Topic(c.topic, c.msgtype, c.topic in LATCHED))))
-                for c in connections}
-            _wait_for_subscribers(node, publishers.values(), match_timeout)
-            while True:
-                start_wall, start_bag = time.monotonic(), None
-                for connection, stamp, raw in raw_messages(reader, connections):
-                    start_bag = stamp if start_bag is None else start_bag
-                    due = start_wall + (stamp - start_bag) / 1e9 / rate
-                    _spin_for(node, due - time.monotonic())
-                    publishers[connection.id].publish(bytes(raw))
-                    sent += 1
-                if not loop:
-                    break
-            # A reliable writer drops what readers have not acknowledged when it is destroyed.
-            for publisher in publishers.values():
-                publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT_S))
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return sent
-
-
-def _spin_for(node, seconds: float):
-    import rclpy
-
-    end = time.monotonic() + max(0.0, seconds)
-    while True:
-        left = end - time.monotonic()
-        if left <= 0:
-            return
-        rclpy.spin_once(node, timeout_sec=min(left, 0.05))
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog='replay', description=__doc__.split('\n')[0])
-    parser.add_argument('bag', type=Path, help='rosbag2 directory (runs/<name>/bag)')
-    parser.add_argument('--rate', type=float, default=1.0, help='speed factor (live)')
-    parser.add_argument('--loop', action='store_true', help='replay again and again (live)')
-    parser.add_argument('--topics', nargs='*', default=None, help='only these topics (live)')
-    parser.add_argument('--match-timeout', type=float, default=5.0,
-                        help='seconds to wait for subscribers of every topic (live)')
-    parser.add_argument('--offline', action='store_true',
-                        help='write metrics/plots instead of publishing')
-    parser.add_argument('--out', type=Path, default=None, help='output directory (offline)')
-    parser.add_argument('--params', type=Path, default=None,
-                        help='parameter file of the run (offline; default: the paper defaults)')
-    args = parser.parse_args(argv)
-    if args.rate <= 0:
-        parser.error(f'--rate = {args.rate}: must be > 0')
-    if not (args.bag / 'metadata.yaml').is_file():
-        parser.error(f'{args.bag} is not a rosbag2 directory (no metadata.yaml)')
-    try:
-        if args.offline:
-            if args.out is None:
-                parser.error('--offline needs --out DIR')
-            params = load_params_file(args.params) if args.params else SatParams()
-            replay_offline(args.bag, args.out, params)
-            print(args.out)
-        else:
-            sent = replay_live(args.bag, args.rate, args.loop, args.topics, args.match_timeout)
-            print(f'replayed {sent} messages from {args.bag}', file=sys.stderr)
-    except (ParameterError, ValueError) as error:
-        print(f'replay: {error}', file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())

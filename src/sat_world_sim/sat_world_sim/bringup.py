@@ -3,16 +3,24 @@
 Starts, each as its own process running the installed executable (as ``ros2 run`` would):
 ``world_sim`` (truth, sensors, radio), ``metrics`` (metrics.json and plots), ``recorder`` (every
 topic into ``<run-dir>/bag``, unless ``--no-record``), ``logger`` (Rerun: ``<run-dir>/run.rrd``,
-and a live viewer with ``--view viewer|web``; none with ``--no-view``) and one ``agent`` per
-scenario agent (or all agents in one ``agents_composed`` process with ``--composed``).
-Every process gets the same parameter file, a private ROS_DOMAIN_ID (unless one is given) and
-localhost-only discovery; their output goes to ``<run-dir>/logs/<name>.log`` and (unless
-``--quiet``) to stderr with a ``[name]`` prefix.
+and a live viewer with ``--view viewer|web``; none with ``--view none`` or ``--no-view``) and one
+``agent`` per scenario agent (or all agents in one ``agents_composed`` process with
+``--composed``). Every process gets the same parameter file, ``use_sim_time`` (world_sim's
+``/clock``), the run's seed, the Fast DDS profile (``--fastdds-profile``), a private
+ROS_DOMAIN_ID (unless one is given) and localhost-only discovery; their output goes to
+``<run-dir>/logs/<name>.log`` and (unless ``--quiet``) to stderr with a ``[name]`` prefix.
 
-The run ends when ``metrics`` has written ``metrics.json``; then every process still running is
-stopped (SIGINT, then SIGKILL after a grace period). Ctrl-C stops everything the same way. The
-exit code is 0 only if the world and the metrics finished cleanly; with ``--respawn`` a crashed
-agent is restarted and rejoins. The run directory is printed as the last line on stdout.
+One source of truth for what a run is: ``process_list`` turns the options into the processes
+(package, executable, arguments), and both this bring-up and the launch file
+(``launch/swarm.launch.py``, whose launch arguments are these options) start exactly those;
+``--print-ros2-run`` prints them as ``ros2 run`` lines.
+
+The run ends when the observers (metrics, recorder, logger) have exited, after the world's last
+step; then every process still running is stopped (SIGINT, then SIGKILL after a grace period).
+The agents exit by themselves when the world says the run is finished. Ctrl-C stops everything
+the same way. The exit code is 0 only if the world and the observers finished cleanly; with
+``--respawn`` an agent that fails (non-zero exit, a signal) is restarted and rejoins. The run
+directory is printed as the last line on stdout.
 
     swarm --scenario config/scenarios/paper.yaml --params config/paper.yaml --run-dir runs/x
 """
@@ -22,12 +30,13 @@ from dataclasses import dataclass, field
 import os
 from pathlib import Path
 import random
+import shlex
 import signal
 import subprocess
 import sys
 import threading
 import time
-from typing import List, Optional
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 from ament_index_python.packages import get_package_prefix, get_package_share_directory
 
@@ -37,6 +46,8 @@ from sat_world_sim.scenario import load_scenario, ScenarioError
 
 STOP_GRACE_S = 5.0
 MAX_RESPAWNS = 5
+# Options of the supervision only (not of the run): the launch file has no use for them.
+SUPERVISION_OPTIONS = ('timeout', 'quiet', 'print_ros2_run')
 
 
 def executable(package: str, name: str) -> str:
@@ -47,21 +58,48 @@ def executable(package: str, name: str) -> str:
     return str(path)
 
 
+@dataclass(frozen=True)
+class Process:
+    """One process of a run: what `ros2 run` and a launch file's Node start.
+
+    The command is ``<package's executable> *arguments --ros-args *ros_arguments``.
+    """
+
+    name: str
+    package: str
+    executable: str
+    arguments: Tuple[str, ...] = ()
+    ros_arguments: Tuple[str, ...] = ()
+    respawn: bool = False
+    # Observers (metrics, recorder, logger) end the run: it is over when they all exited.
+    observer: bool = False
+
+    def command(self) -> List[str]:
+        """Return the command line with the installed executable's path."""
+        return [executable(self.package, self.executable), *self.arguments, '--ros-args',
+                *self.ros_arguments]
+
+    def ros2_run(self) -> str:
+        """Return the same process as a shell-quoted ``ros2 run`` line."""
+        return shlex.join(['ros2', 'run', self.package, self.executable, *self.arguments,
+                           '--ros-args', *self.ros_arguments])
+
+
 @dataclass
 class Child:
     """One managed process."""
 
-    name: str
-    command: List[str]
-    respawn: bool = False
-    # Observers (metrics, recorder, logger) end the run: it is over when they all exited.
-    observer: bool = False
+    spec: Process
     process: Optional[subprocess.Popen] = None
     respawns: int = 0
     pumps: List[threading.Thread] = field(default_factory=list)
 
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
     def start(self, env: dict, log_dir: Path, echo: bool):
-        self.process = subprocess.Popen(self.command, env=env, stdout=subprocess.PIPE,
+        self.process = subprocess.Popen(self.spec.command(), env=env, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, bufsize=1,
                                         start_new_session=True)
         log = open(log_dir / f'{self.name}.log', 'a', encoding='utf-8')
@@ -116,65 +154,92 @@ def private_domain_id() -> int:
     return random.Random(f'{os.getpid()}-{time.time_ns()}').randrange(1, 101)
 
 
-def ros_env(domain_id: Optional[int]) -> dict:
-    """Return the children's environment: private domain, discovery on this host only.
+def default_fastdds_profile() -> str:
+    """Return the user's FASTRTPS_DEFAULT_PROFILES_FILE, else the installed config/fastdds.xml.
 
-    Fast DDS gets config/fastdds.xml (fast repair of lost samples, see the file) unless the
-    user names a profile file of their own.
+    config/fastdds.xml makes reliable writers repair a lost sample within 100 ms (see the file).
+    """
+    return os.environ.get('FASTRTPS_DEFAULT_PROFILES_FILE') or str(
+        Path(get_package_share_directory('sat_world_sim')) / 'config' / 'fastdds.xml')
+
+
+def run_env(fastdds_profile: str, domain_id: Optional[int]) -> Dict[str, str]:
+    """Return what a run adds to its processes' environment, in the bring-up and the launch.
+
+    The Fast DDS profile, and the ROS_DOMAIN_ID when one is given.
+    """
+    env = {'FASTRTPS_DEFAULT_PROFILES_FILE': str(fastdds_profile)}
+    if domain_id is not None:
+        env['ROS_DOMAIN_ID'] = str(domain_id)
+    return env
+
+
+def ros_env(domain_id: Optional[int], fastdds_profile: Optional[str] = None) -> dict:
+    """Return the bring-up children's environment: the user's, with run_env's additions.
+
+    The domain is private to the run unless one is given, discovery stays on this host unless
+    the user says otherwise, and Fast DDS gets fastdds_profile (default_fastdds_profile()).
     """
     env = dict(os.environ)
-    env['ROS_DOMAIN_ID'] = str(domain_id if domain_id is not None else private_domain_id())
+    env.update(run_env(fastdds_profile or default_fastdds_profile(),
+                       domain_id if domain_id is not None else private_domain_id()))
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
-    env.setdefault('FASTRTPS_DEFAULT_PROFILES_FILE', str(
-        Path(get_package_share_directory('sat_world_sim')) / 'config' / 'fastdds.xml'))
     env['PYTHONUNBUFFERED'] = '1'
     return env
 
 
-def build_children(args, agent_ids, scenario_seed: int) -> List[Child]:
-    """Return the processes of one run (module docstring)."""
-    params = ['--params-file', str(Path(args.params).resolve())]
+def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[Process]:
+    """Return the processes of one run (module docstring); paths are passed as given.
+
+    Every node runs on world_sim's sim time and gets the run's seed explicitly, so a
+    ``ros2 run`` of these lines is the same run as the bring-up's.
+    """
+    params = ('--params-file', str(options.params), '-p', 'use_sim_time:=true')
+    views = ('-p', f'view_rate:={options.view_rate}') if options.view_rate is not None else ()
     ids = '[' + ','.join(str(i) for i in agent_ids) + ']'
-    run_dir = ['-p', f'run_dir:={Path(args.run_dir).resolve()}', '-p', f'agent_ids:={ids}']
-    observers = [Child('metrics', [executable('sat_world_sim', 'metrics'), '--ros-args',
-                                   *params, *run_dir], observer=True)]
-    if not args.no_record:
-        observers.append(Child('recorder', [executable('sat_world_sim', 'recorder'),
-                                            '--ros-args', *run_dir], observer=True))
-    if not args.no_view:
-        observers.append(Child('logger', [executable('sat_world_sim', 'logger'), '--ros-args',
-                                          *params, *run_dir, '-p', f'sink:={args.view}'],
-                               observer=True))
-    world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *params,
-             '-p', f'scenario:={Path(args.scenario).resolve()}', '-p', f'clock:={args.clock}',
-             '-p', f'period:={args.period}', '-p', f'agent_timeout:={args.agent_timeout}',
-             '-p', f'observers:={len(observers)}', '-p', f'radio.loss:={args.radio_loss}',
-             '-p', f'radio.delay_steps:={args.radio_delay}']
-    if args.seed is not None:
-        world += ['-p', f'seed:={args.seed}']
-    if args.steps is not None:
-        world += ['-p', f'steps:={args.steps}']
-    children = [Child('world_sim', world), *observers]
-    # Agents draw from the run's seed, as in the in-process swarm (inprocess_swarm.py).
-    seed = ['-p', f'seed:={args.seed if args.seed is not None else scenario_seed}']
-    if args.composed:
-        children.append(Child('agents', [executable('sat_agent', 'agents_composed'), '--ids',
-                                         *map(str, agent_ids), '--ros-args', *params, *seed],
-                              respawn=args.respawn))
+    run_dir = ('-p', f'run_dir:={options.run_dir}', '-p', f'agent_ids:={ids}')
+    observers = [Process('metrics', 'sat_world_sim', 'metrics', ros_arguments=(
+        *params, *run_dir), observer=True)]
+    if options.record:
+        observers.append(Process('recorder', 'sat_world_sim', 'recorder', ros_arguments=(
+            '-p', 'use_sim_time:=true', *run_dir), observer=True))
+    if options.view != 'none':
+        observers.append(Process('logger', 'sat_world_sim', 'logger', ros_arguments=(
+            *params, *run_dir, '-p', f'sink:={options.view}'), observer=True))
+    # world_sim and the agents draw from the run's seed, as in the in-process swarm.
+    seed = ('-p', f'seed:={options.seed if options.seed is not None else scenario_seed}')
+    world = (*params, '-p', f'scenario:={options.scenario}', '-p', f'clock:={options.clock}',
+             '-p', f'period:={options.period}', '-p', f'agent_timeout:={options.agent_timeout}',
+             '-p', f'observers:={len(observers)}', '-p', f'radio.loss:={options.radio_loss}',
+             '-p', f'radio.delay_steps:={options.radio_delay}', *seed, *views)
+    if options.steps is not None:
+        world += ('-p', f'steps:={options.steps}')
+    processes = [Process('world_sim', 'sat_world_sim', 'world_sim', ros_arguments=world),
+                 *observers]
+    if options.composed:
+        processes.append(Process('agents', 'sat_agent', 'agents_composed',
+                                 arguments=('--ids', *map(str, agent_ids)),
+                                 ros_arguments=(*params, *seed, *views),
+                                 respawn=options.respawn))
     else:
-        for i in agent_ids:
-            children.append(Child(f'agent_{i}', [
-                executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{i}',
-                *params, '-p', f'agent_id:={i}', *seed], respawn=args.respawn))
-    return children
+        processes += [Process(f'agent_{i}', 'sat_agent', 'agent', ros_arguments=(
+            '-r', f'__ns:=/agent_{i}', *params, '-p', f'agent_id:={i}', *seed, *views),
+            respawn=options.respawn) for i in agent_ids]
+    return processes
+
+
+def ros2_run_lines(processes: Sequence[Process], env: Mapping[str, str]) -> List[str]:
+    """Return a shell script's lines that start the processes as the bring-up does."""
+    lines = [shlex.join(['export', *(f'{k}={v}' for k, v in sorted(env.items()))])]
+    return lines + [f'{process.ros2_run()} &' for process in processes]
 
 
 def supervise(children: List[Child], env: dict, timeout: float, log_dir: Path,
               echo: bool) -> int:
     """Run until every observer exited (or a failure/timeout); return the exit code."""
     by_name = {c.name: c for c in children}
-    observers = [c for c in children if c.observer]
+    observers = [c for c in children if c.spec.observer]
     deadline = time.monotonic() + timeout
     while True:
         codes = [c.poll() for c in observers]
@@ -189,7 +254,8 @@ def supervise(children: List[Child], env: dict, timeout: float, log_dir: Path,
             return 1
         for child in children:
             code = child.poll()
-            if code is None or not child.respawn:
+            # A clean exit (an agent leaving a finished run) is not a crash.
+            if code in (None, 0) or not child.spec.respawn:
                 continue
             if child.respawns < MAX_RESPAWNS:
                 child.respawns += 1
@@ -202,12 +268,18 @@ def supervise(children: List[Child], env: dict, timeout: float, log_dir: Path,
         time.sleep(0.1)
 
 
-def parse_args(argv):
+def build_parser() -> argparse.ArgumentParser:
+    """Return the bring-up's options; the launch file declares one launch argument per run option.
+
+    Options left out (None) get the installed paper files and a time-stamped run directory.
+    """
     parser = argparse.ArgumentParser(prog='swarm', description=__doc__.split('\n')[0])
-    parser.add_argument('--scenario', required=True, help='scenario YAML (config/scenarios)')
-    parser.add_argument('--params', required=True, help='ROS 2 parameter file (config/paper.yaml)')
-    parser.add_argument('--run-dir', required=True, help='directory the run is written to')
-    parser.add_argument('--clock', choices=('lock_step', 'real_time'), default='lock_step')
+    parser.add_argument('--scenario', help='scenario YAML (default: the paper scenario)')
+    parser.add_argument('--params', help='ROS 2 parameter file (default: config/paper.yaml)')
+    parser.add_argument('--run-dir', help='directory the run is written to '
+                                          '(default: runs/swarm-<UTC time>)')
+    parser.add_argument('--clock', choices=('lock_step', 'real_time'), default='lock_step',
+                        help='lock_step (as fast as the agents answer) or real_time')
     parser.add_argument('--period', type=float, default=1.0, help='real-time step period (s)')
     parser.add_argument('--agent-timeout', type=float, default=5.0,
                         help='seconds before a silent agent is marked inactive (lock-step)')
@@ -217,39 +289,99 @@ def parse_args(argv):
     parser.add_argument('--radio-delay', type=int, default=0, help='radio latency in steps')
     parser.add_argument('--composed', action='store_true',
                         help='all agents in one process (one executor)')
-    parser.add_argument('--respawn', action='store_true', help='restart crashed agents')
-    parser.add_argument('--no-record', action='store_true', help='do not record a bag')
-    parser.add_argument('--view', choices=('file', 'viewer', 'web'), default='file',
-                        help='Rerun sink: run.rrd only, a native viewer, or the web viewer '
-                             'on 127.0.0.1 (run.rrd is written in every case)')
-    parser.add_argument('--no-view', action='store_true', help='no Rerun logger')
+    parser.add_argument('--respawn', action='store_true', help='restart agents that fail')
+    parser.add_argument('--record', action=argparse.BooleanOptionalAction, default=True,
+                        help='record every topic into <run-dir>/bag (the recorder)')
+    parser.add_argument('--view', choices=('file', 'viewer', 'web', 'none'), default='file',
+                        help='Rerun logger: run.rrd only, also a native viewer, also the web '
+                             'viewer on 127.0.0.1, or no logger')
+    parser.add_argument('--no-view', dest='view', action='store_const', const='none',
+                        help='no Rerun logger (--view none)')
+    parser.add_argument('--view-rate', type=float, default=None,
+                        help='standard views (RViz2/Foxglove) per second of sim time, 0 = none '
+                             "(default: the nodes' view_rate)")
+    parser.add_argument('--fastdds-profile', default=None,
+                        help='Fast DDS XML profile (default: $FASTRTPS_DEFAULT_PROFILES_FILE, '
+                             'else the installed config/fastdds.xml)')
     parser.add_argument('--domain-id', type=int, default=None,
                         help='ROS_DOMAIN_ID (default: a private one for this run)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')
     parser.add_argument('--quiet', action='store_true',
                         help="only write the processes' output to <run-dir>/logs/, not stderr")
-    return parser.parse_args(argv)
+    parser.add_argument('--print-ros2-run', action='store_true',
+                        help='print the run as `ros2 run` lines (paths as given) and exit')
+    return parser
 
 
-def main(argv=None) -> int:
-    args = parse_args(sys.argv[1:] if argv is None else argv)
-    try:
-        params = load_params_file(args.params)
-        scenario = load_scenario(args.scenario, params.area.width, params.area.height)
-        children = build_children(args, scenario.agent_ids, scenario.seed)
-    except (ParameterError, ScenarioError, OSError) as error:
-        print(f'swarm: {error}', file=sys.stderr)
-        return 2
-    env = ros_env(args.domain_id)
-    print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {len(scenario.agent_ids)} agents, "
-          f'{args.clock}, run dir {args.run_dir}', file=sys.stderr)
-    log_dir = Path(args.run_dir) / 'logs'
+def parse_args(argv) -> argparse.Namespace:
+    """Parse the options and fill the defaults left open (build_parser)."""
+    options = build_parser().parse_args(argv)
+    share = Path(get_package_share_directory('sat_world_sim')) / 'config'
+    options.scenario = options.scenario or str(share / 'scenarios' / 'paper.yaml')
+    options.params = options.params or str(share / 'paper.yaml')
+    options.run_dir = options.run_dir or time.strftime('runs/swarm-%Y%m%d-%H%M%S', time.gmtime())
+    options.fastdds_profile = options.fastdds_profile or default_fastdds_profile()
+    return options
+
+
+def launch_arguments() -> List[Tuple[str, str, str]]:
+    """Return (name, default, description) of each run option, as launch arguments.
+
+    Names are the options' names with _ (seed, clock, run_dir, record, ...); an empty default
+    is the option's own default.
+    """
+    arguments = []
+    for action in build_parser()._actions:
+        alias = isinstance(action, argparse._StoreConstAction) and action.const == 'none'
+        if action.dest in SUPERVISION_OPTIONS or action.dest == 'help' or alias:
+            continue
+        default = action.default
+        if default is None:
+            text = ''
+        else:
+            text = str(default).lower() if isinstance(default, bool) else str(default)
+        arguments.append((action.dest, text, action.help or ''))
+    return arguments
+
+
+def options_from_launch(values: Mapping[str, str]) -> argparse.Namespace:
+    """Return the options a launch file's argument values stand for (launch_arguments)."""
+    argv = []
+    for action in build_parser()._actions:
+        value = str(values.get(action.dest, '')).strip()
+        if action.dest in SUPERVISION_OPTIONS or not value or not action.option_strings:
+            continue
+        flag = action.option_strings[0]
+        if isinstance(action, argparse.BooleanOptionalAction):
+            argv.append(flag if value.lower() == 'true' else action.option_strings[1])
+        elif isinstance(action, argparse._StoreTrueAction):
+            argv += [flag] if value.lower() == 'true' else []
+        elif not isinstance(action, argparse._StoreConstAction):
+            argv += [flag, value]
+    return parse_args(argv)
+
+
+def absolute(options) -> argparse.Namespace:
+    """Return a copy of the options with absolute paths (a child's working directory may vary)."""
+    paths = {name: str(Path(getattr(options, name)).resolve())
+             for name in ('scenario', 'params', 'run_dir', 'fastdds_profile')}
+    return argparse.Namespace(**{**vars(options), **paths})
+
+
+def run(processes: Sequence[Process], env: dict, run_dir: Path, timeout: float,
+        echo: bool) -> int:
+    """Start the processes, supervise them until the run is over, stop what is left.
+
+    Returns the exit code (supervise; 130 on Ctrl-C; 1 when no metrics.json was written).
+    """
+    log_dir = Path(run_dir) / 'logs'
     log_dir.mkdir(parents=True, exist_ok=True)
+    children = [Child(process) for process in processes]
     code = 1
     try:
         for child in children:
-            child.start(env, log_dir, not args.quiet)
-        code = supervise(children, env, args.timeout, log_dir, not args.quiet)
+            child.start(env, log_dir, echo)
+        code = supervise(children, env, timeout, log_dir, echo)
     except KeyboardInterrupt:
         print('[swarm] interrupted: stopping every process', file=sys.stderr)
         code = 130
@@ -260,9 +392,36 @@ def main(argv=None) -> int:
         for child in children:
             for pump in child.pumps:
                 pump.join(timeout=1.0)
-    if code == 0 and not (Path(args.run_dir) / 'metrics.json').is_file():
+    if code == 0 and not (Path(run_dir) / 'metrics.json').is_file():
         print('[swarm] metrics.json was not written', file=sys.stderr)
         code = 1
+    return code
+
+
+def load_run(options) -> List[Process]:
+    """Check the parameter and scenario files and return the run's processes."""
+    params = load_params_file(options.params)
+    scenario = load_scenario(options.scenario, params.area.width, params.area.height)
+    return process_list(options, scenario.agent_ids, scenario.seed)
+
+
+def main(argv=None) -> int:
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    options = args if args.print_ros2_run else absolute(args)
+    try:
+        processes = load_run(options)
+    except (ParameterError, ScenarioError, OSError) as error:
+        print(f'swarm: {error}', file=sys.stderr)
+        return 2
+    if args.print_ros2_run:
+        env = run_env(options.fastdds_profile, options.domain_id)
+        print('\n'.join(ros2_run_lines(processes, env)))
+        return 0
+    env = ros_env(options.domain_id, options.fastdds_profile)
+    agents = sum(p.executable == 'agent' for p in processes) or 'composed'
+    print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {agents} agents, "
+          f'{options.clock}, run dir {args.run_dir}', file=sys.stderr)
+    code = run(processes, env, Path(options.run_dir), options.timeout, not options.quiet)
     print(Path(args.run_dir))
     return code
 

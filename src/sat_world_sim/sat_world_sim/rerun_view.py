@@ -57,7 +57,6 @@ off (only ``FORCE_RERUN_ANALYTICS`` to force them on); its config file is
 ``$XDG_CONFIG_HOME/rerun/analytics.json``.
 """
 
-import math
 import os
 from pathlib import Path
 import subprocess
@@ -67,6 +66,9 @@ from typing import Dict, Mapping, Optional
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+
+from sat_agent.view_geometry import (agent_colour, ellipse_points, sigma_ellipses,
+                                     TRUTH_COLOUR)
 
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.records import density_values, MODE_NAMES, step_record, StepMessages
@@ -82,35 +84,21 @@ APPLICATION_ID = 'sat_swarm'
 FILE_CHUNK_ROWS = 128
 FILE_CHUNK_BYTES = 1 << 20
 FILE_FLUSH_TICK_S = 3600.0
-# Distinct agent colours (the tab10 palette) and the truth's colour.
-PALETTE = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (148, 103, 189), (140, 86, 75),
-           (227, 119, 194), (188, 189, 34), (23, 190, 207)]
-TRUTH_COLOUR = (214, 39, 40)
 LINK_COLOUR = (240, 240, 240)
-SIGMAS = 2.0
 # Colormap range of the density images (uint8, 255 = just searched): past 255, so a searched
 # cell is viridis' middle teal and the agents' lines stay readable on it.
 DENSITY_RANGE = [0.0, 400.0]
 ELLIPSE_POINTS = 32
 
 
-def agent_colour(agent_id: int):
-    """Return the RGB colour of an agent (ids from 1)."""
-    return PALETTE[(int(agent_id) - 1) % len(PALETTE)]
-
-
 def _xy(point) -> list:
     return [float(point.x), float(point.y)]
 
 
-def _ellipse(centre, cov_xy: np.ndarray, sigmas: float = SIGMAS) -> np.ndarray:
-    """Return the closed sigmas-ellipse of a 2 x 2 covariance around centre, (N, 2) points."""
-    cov = 0.5 * (cov_xy + cov_xy.T)
-    values, vectors = np.linalg.eigh(cov)
-    values = np.clip(values, 0.0, None)
-    angles = np.linspace(0.0, 2.0 * math.pi, ELLIPSE_POINTS)
-    circle = np.stack([np.cos(angles), np.sin(angles)], axis=1)
-    return np.asarray(centre) + sigmas * (circle * np.sqrt(values)) @ vectors.T
+def _ellipse(centre, cov_xy: np.ndarray) -> np.ndarray:
+    """Return the closed 2-sigma ellipse of a 2 x 2 covariance around centre, (N, 2) points."""
+    semi, yaw = sigma_ellipses(cov_xy)
+    return ellipse_points(centre, semi[0], yaw[0], ELLIPSE_POINTS)
 
 
 def density_image(msg) -> Optional[np.ndarray]:

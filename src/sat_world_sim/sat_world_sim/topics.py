@@ -1,13 +1,16 @@
-"""Every topic of a run's graph: its name, message type and whether it is latched (/world/*).
+"""Every topic of a run's graph: its name, message type and whether it is latched.
 
 Transport-free, so the recorder, the replay and tests agree on one list. Names follow
-SPEC.md: agent topics live under the agent's namespace ``/agent_<i>``.
+SPEC.md: agent topics live under the agent's namespace ``/agent_<i>``. Latched (transient
+local): the world's topics and the standard views. The standard-typed topics' names come from
+sat_agent.topic_names; the robot inputs are not part of a simulated run's graph.
 """
 
 from dataclasses import dataclass
 from typing import Iterable, List, Optional, Tuple
 
 from sat_agent.agent_core import REPORT_KINDS
+from sat_agent.topic_names import AGENT_VIEWS, CLOCK, ROBOT_GOAL, TRUTH_MARKERS, VIEW_PREFIX
 
 REPORT_TYPES = tuple(zip(REPORT_KINDS, ('SearchDensity', 'MultiTargetEstimate', 'AgentMode')))
 
@@ -22,18 +25,23 @@ class Topic:
 
 
 def world_topics() -> List[Topic]:
-    """Return the world's topics: clock, ground truth, radio traffic."""
-    return [Topic('/world/step', 'sat_msgs/msg/WorldStep', True),
+    """Return the world's topics: sim time, step, ground truth (also as markers), radio."""
+    return [Topic(*CLOCK),
+            Topic('/world/step', 'sat_msgs/msg/WorldStep', True),
             Topic('/world/truth', 'sat_msgs/msg/GroundTruth', True),
+            Topic(*TRUTH_MARKERS, True),
             Topic('/world/radio', 'sat_msgs/msg/RadioTraffic', True)]
 
 
 def agent_topics(agent_id: int) -> List[Topic]:
-    """Return one agent's topics: scans, commands, status, its radio outbox and inbox."""
+    """Return one agent's topics: scans, commands, goal, status, views, radio out and in."""
     ns = f'/agent_{agent_id}'
     topics = [Topic(f'{ns}/measurements', 'sat_msgs/msg/MeasurementSet'),
               Topic(f'{ns}/cmd', 'sat_msgs/msg/ControlCommand'),
+              Topic(f'{ns}/{ROBOT_GOAL[0]}', ROBOT_GOAL[1]),
               Topic(f'{ns}/status', 'sat_msgs/msg/AgentStatus')]
+    topics += [Topic(f'{ns}/{VIEW_PREFIX}{name}', msgtype, True)
+               for name, msgtype in AGENT_VIEWS.items()]
     for direction in ('out', 'in'):
         topics += [Topic(f'{ns}/radio/{direction}/{kind}', f'sat_msgs/msg/{name}')
                    for kind, name in REPORT_TYPES]

@@ -3,8 +3,11 @@
 The maths is in world_model.World (truth, scans, moves, coverage) and radio.Radio (range gate,
 loss, delay, counters); this node moves messages:
 
-- publishes ``/world/step`` (WorldStep), ``/world/truth`` (GroundTruth), ``/world/radio``
-  (RadioTraffic) and each agent's ``/agent_<i>/measurements`` (MeasurementSet);
+- publishes ``/clock`` (rosgraph_msgs/Clock: t_k = k dt when step k starts, in both clocks),
+  ``/world/step`` (WorldStep), ``/world/truth`` (GroundTruth), ``/world/radio``
+  (RadioTraffic), ``/world/truth_markers`` (MarkerArray, every 1 / ``view_rate`` s of sim
+  time: sat_agent.ros.views) and each agent's ``/agent_<i>/measurements`` (MeasurementSet);
+  every header carries t_k and its frame (sat_agent.stamps);
 - takes ``/agent_<i>/cmd`` (ControlCommand) and ``/agent_<i>/radio/out/<kind>``, forwarding the
   latter to ``/agent_<j>/radio/in/<kind>`` for the agents j in range (the only path between
   agents). Reports are taken raw and, once validated, the received bytes are forwarded as they
@@ -25,7 +28,9 @@ position and is not waited for until it speaks again. Commands that are not one 
 of Eqn. controlVectors or leave the area are refused with a log line; the agent holds. Every
 command and report is validated (the sender's namespace, the step, the content: the radio never
 forwards garbage); what is dropped is counted per reason on ``/diagnostics``.
-When the run is over the node publishes a final WorldStep with ``finished`` and exits.
+When the run is over the node publishes a final WorldStep with ``finished`` (the agents exit on
+it) and exits. Its timers run on the steady clock (node_runner.steady_timer): it is the source
+of ``/clock``, so under ``use_sim_time`` its own ROS clock only moves when it steps.
 """
 
 from collections import Counter
@@ -33,23 +38,31 @@ from pathlib import Path
 import time
 
 from ament_index_python.packages import get_package_share_directory
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3
 from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
 from std_msgs.msg import String
+from visualization_msgs.msg import MarkerArray
 
 from sat_agent.agent_core import wire_bytes
-from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
-from sat_agent.msg_conversions import InvalidMessage, measurements_to_msg, point, RADIO_TYPES
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.qos import RADIO, STEP, WORLD
-from sat_agent.radio_parsing import RadioParser
-from sat_agent.ros_params import declare_sat_params
+from sat_agent.motion_model import POSITION
+from sat_agent.ros import views
+from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
+from sat_agent.ros.msg_conversions import (header, InvalidMessage, measurements_to_msg, point,
+                                           RADIO_TYPES)
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.qos import RADIO, STEP, WORLD
+from sat_agent.ros.radio_parsing import RadioParser
+from sat_agent.ros.ros_params import declare_node_params, declare_sat_params, WORLD_PARAMS
 from sat_agent.search_density import Lattice
+from sat_agent.stamps import step_time, views_due
+from sat_agent.topic_names import CLOCK, TRUTH_MARKERS
 from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet, RadioTraffic,
                           TargetTruth, WorldStep)
 
-from sat_world_sim import observer
 from sat_world_sim.radio import Radio
+from sat_world_sim.ros import observer
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
@@ -69,27 +82,21 @@ class WorldSimNode(Node):
     def __init__(self, **kwargs):
         super().__init__('world_sim', **kwargs)
         self.params = declare_sat_params(self)
-        scenario_path = self.declare_parameter('scenario', '').value or default_scenario()
-        scenario = load_scenario(scenario_path, self.params.area.width, self.params.area.height)
-        seed = self.declare_parameter('seed', -1).value
-        if seed >= 0:
-            scenario = scenario.with_seed(seed)
-        steps = self.declare_parameter('steps', 0).value
-        self.total_steps = steps if steps > 0 else scenario.steps
-        clock = self.declare_parameter('clock', 'lock_step').value
-        if clock not in CLOCKS:
-            raise ValueError(f"parameter 'clock' = {clock!r}: allowed are {sorted(CLOCKS)}")
-        self.clock = clock
-        self.period = float(self.declare_parameter('period', 1.0).value)
-        self.agent_timeout = float(self.declare_parameter('agent_timeout', 5.0).value)
-        self.startup_timeout = float(self.declare_parameter('startup_timeout', 60.0).value)
-        self.observers = int(self.declare_parameter('observers', 0).value)
-        self.radio = Radio(self.params.cooperation.comm_range,
-                           float(self.declare_parameter('radio.loss', 0.0).value),
-                           int(self.declare_parameter('radio.delay_steps', 0).value),
-                           seed=scenario.seed)
-        if self.period <= 0 or self.agent_timeout <= 0:
-            raise ValueError("parameters 'period' and 'agent_timeout' must be > 0")
+        node = declare_node_params(self, WORLD_PARAMS)
+        scenario = load_scenario(node.scenario or default_scenario(), self.params.area.width,
+                                 self.params.area.height)
+        if node.seed >= 0:
+            scenario = scenario.with_seed(node.seed)
+        self.total_steps = node.steps if node.steps > 0 else scenario.steps
+        self.clock = clock = node.clock
+        self.period = node.period
+        self.agent_timeout = node.agent_timeout
+        self.startup_timeout = node.startup_timeout
+        self.observers = node.observers
+        self.view_rate = node.view_rate
+        self.dt = self.params.motion.dt
+        self.radio = Radio(self.params.cooperation.comm_range, node.radio_loss,
+                           node.radio_delay_steps, seed=scenario.seed)
 
         self.world = World(scenario, self.params)
         self.ids = self.world.agent_ids
@@ -106,7 +113,10 @@ class WorldSimNode(Node):
         self._ready_since = None
         self._observers_ready = set()
         self._finished_at = None
+        self._last_view_step = None
 
+        self.clock_pub = self.create_publisher(Clock, CLOCK[0], STEP)
+        self.markers_pub = self.create_publisher(MarkerArray, TRUTH_MARKERS[0], WORLD)
         self.step_pub = self.create_publisher(WorldStep, '/world/step', WORLD)
         self.truth_pub = self.create_publisher(GroundTruth, '/world/truth', WORLD)
         self.traffic_pub = self.create_publisher(RadioTraffic, '/world/radio', WORLD)
@@ -127,7 +137,7 @@ class WorldSimNode(Node):
         self.create_subscription(String, observer.TOPIC,
                                  lambda m: self._observers_ready.add(m.data), observer.QOS)
         self._launched = time.monotonic()
-        self.create_timer(0.02, self._tick)
+        steady_timer(self, 0.02, self._tick)
         self.get_logger().info(
             f'{scenario.name}: {len(self.ids)} agents, {self.total_steps} steps, {clock} clock')
 
@@ -138,7 +148,7 @@ class WorldSimNode(Node):
 
         ``observers`` is how many nodes besides the agents must see the run from its first step
         (the metrics node, a logger, a recorder): each announces itself on /world/observers once
-        all its subscriptions are matched (sat_world_sim.observer).
+        all its subscriptions are matched (sat_world_sim.ros.observer).
         """
         for i in self.ids:
             ns = f'/agent_{i}'
@@ -202,14 +212,24 @@ class WorldSimNode(Node):
 
     def _begin_step(self):
         k = self.world.step
+        sec, nanosec = step_time(k, self.dt)
+        self.clock_pub.publish(Clock(clock=Time(sec=sec, nanosec=nanosec)))
         delivered = self._forward(self.radio.due(k))
         poses = self.world.poses()
+        truth = self.world.truth()
         self.step_pub.publish(self._step_msg(k, finished=False))
-        self.truth_pub.publish(self._truth_msg(k, poses))
+        self.truth_pub.publish(self._truth_msg(k, poses, truth))
+        if views_due(k, self._last_view_step, self.dt, self.view_rate):
+            self._last_view_step = k
+            self.markers_pub.publish(views.truth_markers(
+                truth.ids, truth.states[:, POSITION], poses,
+                (self.params.area.width, self.params.area.height),
+                self.params.sensor.square_side, header(k, self.dt)))
         lock_step = self.clock == 'lock_step'
         for i, scan in self.world.scan_all().items():
             self.scan_pubs[i].publish(measurements_to_msg(
-                i, k, poses[i], scan.measurements, delivered[i] if lock_step else 0))
+                i, k, poses[i], scan.measurements, self.dt,
+                delivered[i] if lock_step else 0))
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
         now = time.monotonic()
@@ -318,25 +338,26 @@ class WorldSimNode(Node):
 
     def _step_msg(self, k: int, finished: bool) -> WorldStep:
         scenario = self.world.scenario
-        return WorldStep(step=k, total_steps=self.total_steps, clock=CLOCKS[self.clock],
+        return WorldStep(header=header(k, self.dt), step=k, total_steps=self.total_steps,
+                         clock=CLOCKS[self.clock],
                          finished=finished, scenario=scenario.name, seed=scenario.seed,
                          late_commands=self.late_commands)
 
-    def _truth_msg(self, k: int, poses) -> GroundTruth:
-        truth = self.world.truth()
+    def _truth_msg(self, k: int, poses, truth) -> GroundTruth:
         targets = [TargetTruth(id=int(i), alive=True, position=point(s[[0, 2]]),
                                velocity=Vector3(x=float(s[1]), y=float(s[3]), z=0.0))
                    for i, s in zip(truth.ids, truth.states)]
         agents = [AgentTruth(id=i, position=point(poses[i]), active=i in self.active)
                   for i in self.ids]
-        return GroundTruth(step=k, targets=targets, agents=agents,
+        return GroundTruth(header=header(k, self.dt), step=k, targets=targets, agents=agents,
                            searched_fraction=self.world.searched_fraction())
 
     def _traffic_msg(self, k: int, poses) -> RadioTraffic:
         links = sorted(self.radio.links(poses))
         pairs = sorted(self.radio.messages)
         senders = sorted(self.radio.dropped)
-        return RadioTraffic(step=k, link_a=[a for a, _ in links], link_b=[b for _, b in links],
+        return RadioTraffic(header=header(k, self.dt), step=k, link_a=[a for a, _ in links],
+                            link_b=[b for _, b in links],
                             sender=[s for s, _ in pairs], receiver=[r for _, r in pairs],
                             messages=[self.radio.messages[p] for p in pairs],
                             bytes=[self.radio.bytes[p] for p in pairs],

@@ -14,7 +14,7 @@ from typing import Tuple
 
 from rclpy.serialization import deserialize_message
 
-from sat_agent.msg_conversions import InvalidMessage, RADIO_TYPES, report_part_from_msg
+from sat_agent.ros.msg_conversions import InvalidMessage, RADIO_TYPES, report_part_from_msg
 from sat_agent.search_density import Lattice
 
 

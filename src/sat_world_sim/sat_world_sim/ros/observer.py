@@ -12,7 +12,8 @@ from pathlib import Path
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
-from sat_agent.qos import RADIO, STEP, WORLD
+from sat_agent.ros.node_runner import steady_timer
+from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
 
 TOPIC = '/world/observers'
@@ -27,7 +28,7 @@ class ReadyAnnouncer:
         self._node = node
         self._subscriptions = list(subscriptions)
         self._publisher = node.create_publisher(String, TOPIC, QOS)
-        self._timer = node.create_timer(period, self._check)
+        self._timer = steady_timer(node, period, self._check)
 
     def _check(self):
         if all(s.get_publisher_count() > 0 for s in self._subscriptions):

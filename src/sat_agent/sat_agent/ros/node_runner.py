@@ -1,4 +1,4 @@
-"""The one way every sat-swarm node process starts, spins and stops (ros2/demos idiom).
+"""The one way every sat-swarm node process starts, ticks, spins and stops (ros2/demos idiom).
 
 The executor is rclpy's EventsExecutor where the installed rclpy has it (Jazzy >= 7.1.4): it
 hands each arriving message to its callback directly, whereas the SingleThreadedExecutor
@@ -12,6 +12,7 @@ import signal
 import sys
 
 import rclpy
+from rclpy.clock import Clock, ClockType
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
@@ -24,6 +25,20 @@ except ImportError:
 SPIN_TIMEOUT_S = 0.1
 # Signals that end a process cleanly (Ctrl-C, the bring-up's stop, `kill`).
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+def steady_timer(node, period: float, callback):
+    """Create a timer on the steady (monotonic) clock, whatever ``use_sim_time`` says.
+
+    Every timer of these nodes is a watchdog or a poller (start-up handshakes, step deadlines,
+    timeouts, diagnostics). Under ``use_sim_time`` a node's own clock advances only when
+    world_sim publishes ``/clock``, at the start of a step, and world_sim waits for these very
+    timers before it starts one: on the ROS clock they would never fire. Message stamps come
+    from the step (sat_agent.stamps); what reads the node's clock (the diagnostics' stamps)
+    follows ``/clock``.
+    """
+    # Positional: callback group, then clock (rclpy's Node.create_timer signature).
+    return node.create_timer(period, callback, None, Clock(clock_type=ClockType.STEADY_TIME))
 
 
 def finish_run(node, code: int = 0):

@@ -18,12 +18,13 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
-from sat_agent.node_runner import finish_run, run_nodes
+from sat_agent.ros.msg_conversions import message_class
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_msgs.msg import WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.observer import declare_run, ReadyAnnouncer
-from sat_world_sim.replay_support import message_class, topic_qos
+from sat_world_sim.ros.observer import declare_run, ReadyAnnouncer
+from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics
 
 # After the world's final step, keep recording this long for the last messages in flight.
@@ -68,7 +69,7 @@ class RecorderNode(Node):
                 lambda data, c=connection, name=topic.name: self._write(c, name, data),
                 qos, raw=True))
         self.ready = ReadyAnnouncer(self, subscriptions)
-        self.create_timer(0.2, self._tick)
+        steady_timer(self, 0.2, self._tick)
 
     def _write(self, connection, name: str, data: bytes):
         self.writer.write(connection, time.time_ns(), data)

@@ -3,10 +3,11 @@ import pytest
 
 from sat_agent.actions import admissible_mask, candidate_poses
 from sat_agent.agent_core import Agent
+from sat_agent.baselines import baseline_policy
+from sat_agent.baselines.lawnmower import boustrophedon_order, LawnmowerPolicy
+from sat_agent.baselines.random_walk import RandomWalkPolicy
 from sat_agent.config import AreaParams, ParameterError, SatParams
 from sat_agent.mode_machine import Mode
-from sat_agent.search_baselines import (
-    baseline_policy, boustrophedon_order, LawnmowerPolicy, RandomWalkPolicy)
 from sat_agent.search_map import SearchMap
 from sat_agent.sensor_model import in_sensing_square
 
@@ -31,7 +32,7 @@ def fly_lawnmower(start, steps):
         seen |= in_sensing_square(MAP.centers, pose, PARAMS.sensor.square_side)
         if seen.all():
             return step, pose
-        move = policy.choose(pose)
+        move = policy.choose(pose, None)
         assert admissible_mask(pose, PARAMS.actions, PARAMS.area)[move.action]
         pose = candidate_poses(pose, PARAMS.actions)[move.action]
     return None, pose
@@ -54,7 +55,7 @@ def test_random_walk_takes_admissible_actions_reproducibly_per_seed_and_agent():
         policy = RandomWalkPolicy(PARAMS, agent_id, seed)
         pose, actions = np.asarray(pose), []
         for _ in range(steps):
-            move = policy.choose(pose)
+            move = policy.choose(pose, None)
             assert admissible_mask(pose, PARAMS.actions, PARAMS.area)[move.action]
             reached = candidate_poses(pose, PARAMS.actions)[move.action]
             np.testing.assert_allclose(move.goal, reached)
@@ -86,7 +87,7 @@ def test_a_searching_agent_moves_as_its_baseline_says():
     pose = np.array([10.0, 60.0])
     for k in range(1, 6):
         out = agent.step(k, pose, np.zeros((0, 2)), [])
-        expected = reference.choose(pose)
+        expected = reference.choose(pose, None)
         assert out.mode == Mode.SEARCH and out.action == expected.action
         np.testing.assert_allclose(out.plan, expected.plan)
         pose = candidate_poses(pose, params.actions)[out.action]

@@ -11,6 +11,8 @@ import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
+from sat_agent.ros.node_runner import steady_timer
+
 LOG_THROTTLE_S = 5.0
 DIAGNOSTICS_PERIOD_S = 1.0
 
@@ -30,7 +32,7 @@ class InputGuard:
         self._last_warning = {}      # reason -> time.monotonic() of its last warning
         self._warned = Counter()     # reason -> drops counted at its last warning
         self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        node.create_timer(period, self.publish)
+        steady_timer(node, period, self.publish)
 
     def accept(self, kind: str):
         """Count one valid message of this kind."""
@@ -69,5 +71,6 @@ class InputGuard:
     def publish(self):
         """Publish the counters on /diagnostics."""
         array = DiagnosticArray(status=[self.status()])
+        # The node's clock: sim time (the last /clock) under use_sim_time.
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)

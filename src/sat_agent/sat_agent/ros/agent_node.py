@@ -5,22 +5,34 @@ Run one per agent in its own namespace::
     ros2 run sat_agent agent --ros-args -r __ns:=/agent_3 -p agent_id:=3 \
         --params-file config/paper.yaml
 
-Topics (relative, so under the namespace), with the QoS of sat_agent.qos:
+Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
 
-- ``measurements`` (sub, MeasurementSet, STEP);
+- ``measurements`` (sub, MeasurementSet, STEP) with ``input_source:=world_sim`` (default), or
+  ``robot/pose`` (PoseStamped) and ``robot/detections`` (PointCloud2) with
+  ``input_source:=robot`` (sub, ROBOT: sat_agent.ros.robot_input says what they hold);
+- ``/world/step`` (sub, WorldStep, WORLD): with world_sim input, the agent exits (code 0)
+  when the world says the run is ``finished``;
 - ``radio/in/{search_density,estimate,mode}`` (sub, RADIO, raw bytes parsed by
-  sat_agent.radio_parsing, once per process in composed mode);
-- ``cmd`` (pub, ControlCommand, STEP), ``radio/out/*`` (pub, RADIO);
-- ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder.
+  sat_agent.ros.radio_parsing, once per process in composed mode);
+- ``cmd`` (pub, ControlCommand, STEP) and ``robot/goal`` (pub, PoseStamped, STEP): the
+  position the chosen action leads to, for world_sim or for a real drone's position
+  controller; ``radio/out/*`` (pub, RADIO);
+- ``status`` (pub, AgentStatus, STEP), for the logger, the metrics and the recorder;
+- ``view/*`` (pub, WORLD): the standard views (sat_agent.ros.views) every 1 / ``view_rate``
+  seconds of sim time (the plan when it changed).
+
+Every header carries the step's sim time and a frame (sat_agent.stamps).
 
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
 seconds with what it has (a lost message must not stall it). If world_sim dies, the agent
 holds (it sends no command, so it does not move), resumes when scans come again, and exits
-cleanly (code 0) after ``world_timeout`` seconds without a scan. Every message is validated on
-arrival (sat_agent.msg_conversions: finite numbers, lengths, the grid geometry, known modes,
-sane counts, stale or future steps, the sender); an invalid one is dropped with a rate-limited
-warning and counted per reason, and the counters go to ``/diagnostics`` every second.
+cleanly (code 0) after ``world_timeout`` seconds without a scan. A robot's scans are stepped
+at once with the reports in the inbox, as in the real-time clock. Every message is validated
+on arrival (sat_agent.ros.msg_conversions and robot_input: finite numbers, lengths, the grid
+geometry, known modes and frames, sane counts, stale or future steps, the sender); an invalid
+one is dropped with a rate-limited warning and counted per reason, and the counters go to
+``/diagnostics`` every second.
 """
 
 import argparse
@@ -28,22 +40,30 @@ import sys
 import time
 from typing import Optional
 
+from geometry_msgs.msg import PoseStamped
 import numpy as np
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.utilities import remove_ros_args
+from sensor_msgs.msg import PointCloud2
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
-from sat_agent.input_guard import InputGuard, LOG_THROTTLE_S
-from sat_agent.msg_conversions import (estimate_to_msg, InvalidMessage, measurements_from_msg,
-                                       point, RADIO_TYPES, report_from_parts, report_to_msgs)
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.qos import RADIO, STEP
-from sat_agent.radio_parsing import RadioParser
-from sat_agent.ros_params import declare_required_int, declare_sat_params
+from sat_agent.ros import views
+from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
+from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage,
+                                           measurements_from_msg, message_class, point,
+                                           RADIO_TYPES, report_from_parts, report_to_msgs)
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.qos import RADIO, ROBOT, STEP, WORLD
+from sat_agent.ros.radio_parsing import RadioParser
+from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotPose
+from sat_agent.ros.ros_params import AGENT_PARAMS, declare_node_params, declare_sat_params
 from sat_agent.search_density import Lattice
-from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet
+from sat_agent.stamps import step_at, views_due
+from sat_agent.topic_names import (AGENT_VIEWS, ROBOT_DETECTIONS, ROBOT_GOAL, ROBOT_POSE,
+                                   VIEW_PREFIX)
+from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet, WorldStep
 
 # Particles shown to the logger per step: enough to see the cloud, small on the wire.
 STATUS_PARTICLES = 300
@@ -67,12 +87,9 @@ class AgentNode(Node):
         super().__init__('agent', **kwargs)
         self.radio_parser = radio_parser or RadioParser()
         self.params = declare_sat_params(self)
-        self.agent_id = declare_required_int(self, 'agent_id', 1, 'this agent id (>= 1)')
-        self.seed = self.declare_parameter('seed', 0).value
-        self.report_wait_timeout = float(self.declare_parameter('report_wait_timeout', 2.0).value)
-        self.world_timeout = float(self.declare_parameter('world_timeout', 60.0).value)
-        if self.report_wait_timeout <= 0 or self.world_timeout <= 0:
-            raise ValueError("parameters 'report_wait_timeout', 'world_timeout': must be > 0")
+        self.node_params = declare_node_params(self, AGENT_PARAMS)
+        self.agent_id = self.node_params.agent_id
+        self.dt = self.params.motion.dt
         self._last_scan_at = None
         self.core = None
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
@@ -81,17 +98,31 @@ class AgentNode(Node):
         self._pending = None          # (step, (pose, measurements), deliveries, arrival time)
         self._radio = {}              # (sender, step) -> {kind: validated content}
         self._received_since_step = 0
+        self._robot_pose = RobotPose(None, 0.0)
+        self._last_view_step = None
+        self._last_plan = None
 
         self.cmd_pub = self.create_publisher(ControlCommand, 'cmd', STEP)
+        self.goal_pub = self.create_publisher(PoseStamped, ROBOT_GOAL[0], STEP)
         self.status_pub = self.create_publisher(AgentStatus, 'status', STEP)
         self.radio_pubs = {kind: self.create_publisher(cls, f'radio/out/{kind}', RADIO)
                            for kind, cls in RADIO_TYPES.items()}
-        self.create_subscription(MeasurementSet, 'measurements', self.on_measurements, STEP)
+        self.view_pubs = {name: self.create_publisher(message_class(msgtype),
+                                                      VIEW_PREFIX + name, WORLD)
+                          for name, msgtype in AGENT_VIEWS.items()}
+        if self.node_params.input_source == 'robot':
+            self.create_subscription(PoseStamped, ROBOT_POSE[0], self.on_robot_pose, ROBOT)
+            self.create_subscription(PointCloud2, ROBOT_DETECTIONS[0], self.on_detections,
+                                     ROBOT)
+        else:
+            self.create_subscription(MeasurementSet, 'measurements', self.on_measurements,
+                                     STEP)
+            self.create_subscription(WorldStep, '/world/step', self.on_world_step, WORLD)
         for kind, cls in RADIO_TYPES.items():
             self.create_subscription(cls, f'radio/in/{kind}',
                                      lambda data, kind=kind: self.on_radio(kind, data), RADIO,
                                      raw=True)
-        self.create_timer(0.05, self._check_wait_timeout)
+        steady_timer(self, 0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
 
     # -- input ------------------------------------------------------------------------------
@@ -100,23 +131,59 @@ class AgentNode(Node):
         if msg.agent_id != self.agent_id:
             self.guard.drop('wrong_agent_id', f'scan for agent {msg.agent_id}')
             return
-        if msg.step <= self.last_step:
-            self.guard.drop('stale_step', f'scan of step {msg.step} after step {self.last_step}')
-            return
-        if self.last_step and msg.step > self.last_step + MAX_STEP_JUMP:
-            self.guard.drop('future_step', f'scan of step {msg.step} at step {self.last_step}')
+        if not self._new_step(msg.step):
             return
         try:
             scan = measurements_from_msg(msg)
         except InvalidMessage as error:
             self.guard.drop(error.reason, f'scan of step {msg.step}: {error.detail}')
             return
-        self.guard.accept('measurements')
+        self._take_scan('measurements', msg.step, scan, msg.radio_deliveries)
+
+    def on_robot_pose(self, msg: PoseStamped):
+        try:
+            self._robot_pose = pose_from_msg(msg)
+        except InvalidMessage as error:
+            self.guard.drop(error.reason, f'robot/pose: {error.detail}')
+            return
+        self.guard.accept(ROBOT_POSE[0])
+
+    def on_detections(self, msg: PointCloud2):
+        step = step_at(msg.header.stamp.sec, msg.header.stamp.nanosec, self.dt)
+        if not self._new_step(step):
+            return
+        if self._robot_pose.xy is None:
+            self.guard.drop('no_pose', f'detections of step {step} before any robot/pose')
+            return
+        try:
+            z = detections_from_msg(msg, self._robot_pose, self.agent_id)
+        except InvalidMessage as error:
+            self.guard.drop(error.reason, f'detections of step {step}: {error.detail}')
+            return
+        self._take_scan(ROBOT_DETECTIONS[0], step, (self._robot_pose.xy, z), 0)
+
+    def on_world_step(self, msg: WorldStep):
+        if msg.finished:
+            self.get_logger().info(f'the run finished after step {msg.step}: exiting')
+            finish_run(self, 0)
+
+    def _new_step(self, step: int) -> bool:
+        """Whether a scan of this step is news: not stale, not absurdly far ahead."""
+        if step <= self.last_step:
+            self.guard.drop('stale_step', f'scan of step {step} after step {self.last_step}')
+            return False
+        if self.last_step and step > self.last_step + MAX_STEP_JUMP:
+            self.guard.drop('future_step', f'scan of step {step} at step {self.last_step}')
+            return False
+        return True
+
+    def _take_scan(self, kind: str, step: int, scan, deliveries: int):
+        self.guard.accept(kind)
         self._last_scan_at = time.monotonic()
         if self._pending is not None:
             # The world moved on without our command (we were too slow): step the newest scan.
             self.guard.drop('superseded_scan', f'scan of step {self._pending[0]} never stepped')
-        self._pending = (msg.step, scan, msg.radio_deliveries, time.monotonic())
+        self._pending = (step, scan, deliveries, time.monotonic())
         self._try_step()
 
     def on_radio(self, kind: str, data: bytes):
@@ -142,16 +209,18 @@ class AgentNode(Node):
         self._try_step()
 
     def _check_wait_timeout(self):
-        if self._last_scan_at is not None and \
-                time.monotonic() - self._last_scan_at > self.world_timeout:
-            self.get_logger().warning(f'no scan for {self.world_timeout} s: world_sim is gone, '
+        world_timeout = self.node_params.world_timeout
+        if self._last_scan_at is not None and self.node_params.input_source == 'world_sim' \
+                and time.monotonic() - self._last_scan_at > world_timeout:
+            self.get_logger().warning(f'no scan for {world_timeout} s: world_sim is gone, '
                                       'exiting')
             finish_run(self, 0)
             return
-        if self._pending and time.monotonic() - self._pending[3] > self.report_wait_timeout:
+        wait = self.node_params.report_wait_timeout
+        if self._pending and time.monotonic() - self._pending[3] > wait:
             self.get_logger().warning(
-                f'step {self._pending[0]}: radio messages missing after '
-                f'{self.report_wait_timeout} s, stepping without them',
+                f'step {self._pending[0]}: radio messages missing after {wait} s, stepping '
+                'without them',
                 throttle_duration_sec=LOG_THROTTLE_S)
             self._step()
 
@@ -182,27 +251,46 @@ class AgentNode(Node):
         started = time.perf_counter()
         if self.core is None:
             # (Re)started agents build their core at the first scan they get.
-            self.core = Agent(self.agent_id, self.params, pose, seed=self.seed)
+            self.core = Agent(self.agent_id, self.params, pose, seed=self.node_params.seed)
         output = self.core.step(step, pose, measurements, self._inbox(step))
         self.last_step = step
-        for kind, out in zip(REPORT_KINDS,
-                             report_to_msgs(output.report, self.core.filter.search.lattice)):
+        lattice = self.core.filter.search.lattice
+        for kind, out in zip(REPORT_KINDS, report_to_msgs(output.report, lattice, self.dt)):
             self.radio_pubs[kind].publish(out)
-        self.status_pub.publish(self._status(step, pose, output,
+        stamp = header(step, self.dt)
+        self.status_pub.publish(self._status(stamp, step, pose, output,
                                              time.perf_counter() - started))
         target = candidate_poses(pose, self.params.actions)[output.action]
-        self.cmd_pub.publish(ControlCommand(agent_id=self.agent_id, step=step,
+        self.cmd_pub.publish(ControlCommand(header=stamp, agent_id=self.agent_id, step=step,
                                             action_index=output.action,
                                             target_position=point(target)))
+        self.goal_pub.publish(views.pose_stamped(target, stamp))
+        if views_due(step, self._last_view_step, self.dt, self.node_params.view_rate):
+            self._last_view_step = step
+            self._publish_views(stamp, pose, output)
 
-    def _status(self, step: int, pose, output, compute_time: float) -> AgentStatus:
+    def _publish_views(self, stamp, pose, output):
+        """Publish the standard views of this step (sat_agent.ros.views)."""
+        lattice = self.core.filter.search.lattice
+        pubs = self.view_pubs
+        pubs['search_density'].publish(views.occupancy_grid(output.report.search_values,
+                                                            lattice, stamp))
+        pubs['estimates'].publish(views.estimate_markers(self.agent_id, output.estimate, stamp))
+        pubs['estimate_poses'].publish(views.estimate_poses(output.estimate, stamp))
+        if self._last_plan is None or not np.array_equal(output.plan, self._last_plan):
+            self._last_plan = output.plan
+            pubs['plan'].publish(views.plan_path(output.plan, stamp))
+        pubs['pose'].publish(views.pose_stamped(pose, stamp, self._robot_pose.yaw))
+
+    def _status(self, stamp, step: int, pose, output, compute_time: float) -> AgentStatus:
         targets = self.core.filter.targets
         keep = np.linspace(0, len(targets.weights) - 1,
                            min(STATUS_PARTICLES, len(targets.weights))).astype(int)
         return AgentStatus(
-            agent_id=self.agent_id, step=step, mode=int(output.mode), position=point(pose),
-            plan=[point(p) for p in output.plan], group=sorted(self.core.planner.group),
-            estimate=estimate_to_msg(self.agent_id, step, pose, output.estimate),
+            header=stamp, agent_id=self.agent_id, step=step, mode=int(output.mode),
+            position=point(pose), plan=[point(p) for p in output.plan],
+            group=sorted(self.core.planner.group),
+            estimate=estimate_to_msg(self.agent_id, step, pose, output.estimate, self.dt),
             particle_xy=targets.states[keep][:, (0, 2)].astype(np.float32).ravel(),
             particle_weights=targets.weights[keep].astype(np.float32),
             yielded_to=output.left_overlap_with or 0, compute_time=compute_time)

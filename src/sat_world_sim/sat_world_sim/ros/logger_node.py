@@ -1,7 +1,7 @@
 """The logger node: streams the live graph into a Rerun recording (rerun_view has the layout).
 
 Subscribes to ``/world/step``, ``/world/truth``, ``/world/radio`` and every agent's ``status``
-and ``radio/out/search_density`` (the metrics node's subscription set and QoS, sat_agent.qos)
+and ``radio/out/search_density`` (the metrics node's subscription set and QoS, sat_agent.ros.qos)
 and, like every observer, announces itself on ``/world/observers`` once they have all matched
 (observer.ReadyAnnouncer): world_sim counts it among its ``observers``. Messages are
 grouped by step (rerun_view.StepBuffer, which an offline replay of a bag can use as well); a
@@ -30,11 +30,11 @@ import urllib.parse
 from rclpy.node import Node
 import rerun as rr
 
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.ros_params import declare_sat_params
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.ros_params import declare_sat_params
 
 from sat_world_sim import rerun_view
-from sat_world_sim.observer import declare_run, watch_run
+from sat_world_sim.ros.observer import declare_run, watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
@@ -76,7 +76,7 @@ class LoggerNode(Node):
         self._finished_at = None
         # world_sim starts step 1 once every subscription here has matched its publisher.
         self.ready = watch_run(self, self.agent_ids, self.buffer.add)
-        self.create_timer(0.1, self._tick)
+        steady_timer(self, 0.1, self._tick)
         self.get_logger().info(f'logging to {self.rrd_path} (sink {sink})')
 
     def _start_viewer(self, sink: str, env: dict, viewer_port: int, web_port: int):

@@ -2,18 +2,23 @@
 
 Incoming messages are checked before the core sees them: finite numbers, lengths that match,
 grid geometry equal to this agent's lattice, sane counts. A bad message raises InvalidMessage
-with a short reason (a counter key) and a detail for the log line.
+with a short reason (a counter key) and a detail for the log line. Outgoing messages of step k
+carry its sim time and their frame in the header (sat_agent.stamps).
 """
 
 from array import array
+import importlib
 
+from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Vector3
 import numpy as np
+from std_msgs.msg import Header
 
 from sat_agent.agent_core import AgentReport, REPORT_KINDS
 from sat_agent.density_codec import decode_density, DensityDecodeError
 from sat_agent.mode_machine import Mode
 from sat_agent.search_density import Lattice
+from sat_agent.stamps import agent_frame, MAP_FRAME, step_time
 from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
 from sat_msgs.msg import (AgentMode, GridInfo, MeasurementSet, MultiTargetEstimate as EstimateMsg,
                           RangeBearing, SearchDensity, TargetEstimate as TargetMsg)
@@ -41,6 +46,20 @@ def _finite(reason: str, values, what: str) -> np.ndarray:
     return array
 
 
+def message_class(msgtype: str):
+    """Return the rclpy class of a 'pkg/msg/Name' (or 'pkg/Name') type name."""
+    parts = msgtype.split('/')
+    if len(parts) not in (2, 3) or (len(parts) == 3 and parts[1] != 'msg'):
+        raise ValueError(f'not a message type name: {msgtype!r} (expected pkg/msg/Name)')
+    return getattr(importlib.import_module(f'{parts[0]}.msg'), parts[-1])
+
+
+def header(step: int, dt: float, frame: str = MAP_FRAME) -> Header:
+    """Return the header of a message about step k: t_k = k dt and the frame."""
+    sec, nanosec = step_time(step, dt)
+    return Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id=frame)
+
+
 def point(xy) -> Point:
     """Return a geometry_msgs/Point at (x, y, 0)."""
     return Point(x=float(xy[0]), y=float(xy[1]), z=0.0)
@@ -53,11 +72,16 @@ def xy(p: Point) -> np.ndarray:
 
 # -- measurements ---------------------------------------------------------------------------
 
-def measurements_to_msg(agent_id: int, step: int, pose, measurements, deliveries: int = 0):
-    """Build the MeasurementSet world_sim sends (measurements: (M, 2) range, bearing)."""
+def measurements_to_msg(agent_id: int, step: int, pose, measurements, dt: float,
+                        deliveries: int = 0):
+    """Build the MeasurementSet world_sim sends (measurements: (M, 2) range, bearing).
+
+    Its frame is the agent's: the detections are ranges and bearings from its position.
+    """
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     return MeasurementSet(
-        agent_id=int(agent_id), step=int(step), agent_position=point(pose),
+        header=header(step, dt, agent_frame(agent_id)), agent_id=int(agent_id), step=int(step),
+        agent_position=point(pose),
         detections=[RangeBearing(range=float(r), bearing=float(b)) for r, b in z],
         radio_deliveries=int(deliveries))
 
@@ -77,14 +101,16 @@ def measurements_from_msg(msg: MeasurementSet):
 
 # -- estimates ------------------------------------------------------------------------------
 
-def estimate_to_msg(agent_id: int, step: int, pose, estimate: MultiTargetEstimate) -> EstimateMsg:
-    """Build a MultiTargetEstimate message."""
+def estimate_to_msg(agent_id: int, step: int, pose, estimate: MultiTargetEstimate,
+                    dt: float) -> EstimateMsg:
+    """Build a MultiTargetEstimate message (in the map frame)."""
     targets = [TargetMsg(position=point(t.position),
                          velocity=Vector3(x=float(t.velocity[0]), y=float(t.velocity[1]), z=0.0),
                          covariance=np.asarray(t.covariance, dtype=float).ravel().tolist(),
                          weight=float(t.weight))
                for t in estimate.targets]
-    return EstimateMsg(agent_id=int(agent_id), step=int(step), agent_position=point(pose),
+    return EstimateMsg(header=header(step, dt), agent_id=int(agent_id), step=int(step),
+                       agent_position=point(pose),
                        targets=targets, cardinality=float(estimate.cardinality))
 
 
@@ -115,10 +141,11 @@ def grid_info(lattice: Lattice) -> GridInfo:
                     width=int(lattice.nx), height=int(lattice.ny))
 
 
-def density_to_msg(agent_id: int, step: int, encoded: bytes, lattice: Lattice) -> SearchDensity:
+def density_to_msg(agent_id: int, step: int, encoded: bytes, lattice: Lattice,
+                   dt: float) -> SearchDensity:
     """Build a SearchDensity message from density_codec.encode_density's bytes."""
-    return SearchDensity(agent_id=int(agent_id), step=int(step), grid=grid_info(lattice),
-                         values_zlib=array('B', encoded))
+    return SearchDensity(header=header(step, dt), agent_id=int(agent_id), step=int(step),
+                         grid=grid_info(lattice), values_zlib=array('B', encoded))
 
 
 def density_from_msg(msg: SearchDensity, lattice: Lattice) -> np.ndarray:
@@ -139,9 +166,10 @@ def density_from_msg(msg: SearchDensity, lattice: Lattice) -> np.ndarray:
 
 # -- mode -----------------------------------------------------------------------------------
 
-def mode_to_msg(agent_id: int, step: int, pose, mode: Mode) -> AgentMode:
+def mode_to_msg(agent_id: int, step: int, pose, mode: Mode, dt: float) -> AgentMode:
     """Build an AgentMode message."""
-    return AgentMode(agent_id=int(agent_id), step=int(step), mode=int(mode), position=point(pose))
+    return AgentMode(header=header(step, dt), agent_id=int(agent_id), step=int(step),
+                     mode=int(mode), position=point(pose))
 
 
 def mode_from_msg(msg: AgentMode) -> Mode:
@@ -154,12 +182,12 @@ def mode_from_msg(msg: AgentMode) -> Mode:
 
 # -- whole reports --------------------------------------------------------------------------
 
-def report_to_msgs(report: AgentReport, lattice: Lattice):
+def report_to_msgs(report: AgentReport, lattice: Lattice, dt: float):
     """Split a core AgentReport into the three radio messages (density, estimate, mode)."""
     return (density_to_msg(report.agent_id, report.step, report.encoded_search_values,
-                           lattice),
-            estimate_to_msg(report.agent_id, report.step, report.pose, report.estimate),
-            mode_to_msg(report.agent_id, report.step, report.pose, report.mode))
+                           lattice, dt),
+            estimate_to_msg(report.agent_id, report.step, report.pose, report.estimate, dt),
+            mode_to_msg(report.agent_id, report.step, report.pose, report.mode, dt))
 
 
 def report_part_from_msg(kind: str, msg, lattice: Lattice):

@@ -12,11 +12,11 @@ import time
 
 from rclpy.node import Node
 
-from sat_agent.node_runner import finish_run, run_nodes
-from sat_agent.ros_params import declare_sat_params
+from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.ros_params import declare_sat_params
 
-from sat_world_sim.observer import declare_run, watch_run
 from sat_world_sim.records import RunCollector
+from sat_world_sim.ros.observer import declare_run, watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
@@ -32,7 +32,7 @@ class MetricsNode(Node):
         self.collector = RunCollector(agent_ids)
         self._finished_at = None
         self.ready = watch_run(self, agent_ids, self.collector.add)
-        self.create_timer(0.1, self._tick)
+        steady_timer(self, 0.1, self._tick)
 
     def _tick(self):
         if self.collector.final is None:
