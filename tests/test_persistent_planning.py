@@ -74,6 +74,22 @@ def test_a_node_whose_worth_fell_by_half_was_searched_by_someone_else():
     assert _planned(off, worth).mark_visited((-50.0, -50.0), now).size == 0
 
 
+def test_a_walk_whose_next_node_pays_less_than_half_the_best_rate_is_replanned_alone():
+    worth = np.ones(MAP.size)
+    planner = _planned(worth=worth)
+    pose = np.array([10.0, 60.0])              # the start: the walk's next node is the nearest
+    planner.mark_visited(pose, worth)
+    assert planner.needs_replan(frozenset({1}), False, step=3) == ReplanReason.NONE
+    # Worth regrew tenfold everywhere but at its next node (not searched by others: kept).
+    decayed = 10.0 * worth
+    decayed[planner.walk[0]] = 1.0
+    planner.mark_visited(pose, decayed)
+    assert planner.needs_replan(frozenset({1}), False, step=3) == ReplanReason.DECAYED
+    first = planner.walk[0]
+    planner.plan(1, {1: pose}, decayed)
+    assert planner.walk[0] != first
+
+
 def _revisit_gaps(params, steps: int, start=(10.0, 60.0)) -> np.ndarray:
     """Return the steps between consecutive views of each node by a lone agent, no target."""
     agent = Agent(1, params, start, seed=0)
