@@ -33,7 +33,8 @@ import time
 import numpy as np
 import yaml
 
-from sat_world_sim.bringup import executable, private_domain_id, ros_env
+from sat_world_sim.bringup import executable, ros_env
+from sat_world_sim.domain_ids import claim_domain_id
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE_EVERY = 1000
@@ -217,8 +218,9 @@ def main() -> int:
     args = parser.parse_args()
     if args.run_dir is not None and args.run_dir.exists():
         parser.error(f'--run-dir {args.run_dir} exists already')
-    # The watcher joins the run's private domain, localhost only, like the bring-up's children.
-    domain = private_domain_id()
+    # The watcher joins the run's private domain, localhost only, like the bring-up's children;
+    # this process holds the claim (domain_ids) until it exits, after the swarm.
+    domain = claim_domain_id()
     os.environ.update(ros_env(domain))
     warm_up, window = round(args.warm_up * args.steps), max(1, round(args.window * args.steps))
     with tempfile.TemporaryDirectory(prefix='sat_soak_') as tmp:

@@ -7,12 +7,11 @@ import subprocess
 import time
 
 import pytest
-import rclpy
-from ros_harness import executable, PARAMS, REPO, run_swarm, started
+from ros_harness import (announce, bringup, executable, PARAMS, REPO, ros_node, run_swarm,
+                         scaled, spin_until, started, wait_matched)
 
 from sat_agent.ros.qos import STEP, WORLD
-from sat_msgs.msg import ControlCommand, WorldStep
-from sat_world_sim.ros.observer import ReadyAnnouncer
+from sat_msgs.msg import ControlCommand, MeasurementSet, WorldStep
 
 pytestmark = pytest.mark.ros
 STEPS = 120
@@ -34,27 +33,16 @@ def test_kill_and_respawn_under_radio_loss_completes_the_run(tmp_path):
                '--scenario', str(REPO / 'config' / 'scenarios' / 'paper.yaml'),
                '--params', str(PARAMS), '--run-dir', str(run_dir), '--steps', str(STEPS),
                '--respawn', '--radio-loss', '0.3', '--agent-timeout', '3', '--quiet',
-               '--domain-id', os.environ['ROS_DOMAIN_ID']]
-    rclpy.init()
-    node = rclpy.create_node('fault_injector')
+               '--domain-id', os.environ['ROS_DOMAIN_ID'], '--timeout', str(scaled(480))]
     steps = []
-    node.create_subscription(WorldStep, '/world/step', lambda m: steps.append(m.step), WORLD)
-    swarm = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             start_new_session=True)
-    try:
-        deadline = time.monotonic() + 180
-        while (not steps or steps[-1] < KILL_AT) and time.monotonic() < deadline:
-            rclpy.spin_once(node, timeout_sec=0.05)
+    with ros_node('fault_injector') as node, bringup(command) as swarm:
+        node.create_subscription(WorldStep, '/world/step', lambda m: steps.append(m.step), WORLD)
+        spin_until(node, lambda: steps and steps[-1] >= KILL_AT, 180,
+                   f'/world/step reaching step {KILL_AT}', (swarm,))
         victim = agent_pid(swarm.pid, 2)
-        assert steps and victim is not None, 'the run never reached the kill step'
+        assert victim is not None, 'no agent_2 process under the bring-up'
         os.kill(victim, signal.SIGKILL)
-        out, err = swarm.communicate(timeout=480)
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-        if swarm.poll() is None:
-            os.killpg(swarm.pid, signal.SIGKILL)
-            swarm.wait()
+        out, err = swarm.communicate(timeout=scaled(480))
     assert swarm.returncode == 0, err[-3000:]
     assert out.strip().splitlines()[-1] == str(run_dir)
     assert 'agent_2 exited (-9): respawn 1' in err
@@ -89,41 +77,48 @@ def test_heavy_loss_and_latency_keep_the_swarm_working(tmp_path):
 @pytest.mark.timeout(300)
 def test_agents_hold_then_exit_cleanly_when_world_sim_dies(tmp_path):
     world_timeout = 4.0
+    # More steps than the test ever lets the world run, so the world never finishes by itself
+    # and the resuming scan's step is beyond every scan the world can have sent.
+    world_steps = 1000
+    resume_step = world_steps + 1
     world = [executable('sat_world_sim', 'world_sim'), '--ros-args', '--params-file',
              str(PARAMS), '-p', f"scenario:={REPO / 'config' / 'scenarios' / 'paper.yaml'}",
-             '-p', 'observers:=1']
+             '-p', 'observers:=1', '-p', f'steps:={world_steps}']
     agent = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
              '--params-file', str(PARAMS), '-p', 'agent_id:=1',
              '-p', f'world_timeout:={world_timeout}']
     other = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_2',
              '--params-file', str(PARAMS), '-p', 'agent_id:=2']
-    rclpy.init()
-    node = rclpy.create_node('world_killer')
     commands = []
-    watch = node.create_subscription(ControlCommand, '/agent_1/cmd',
-                                     lambda m: commands.append((time.monotonic(), m.step)), STEP)
-    # world_sim waits for this watcher: a 200-step lock-step run can be over in 2 s, before a
-    # late-matched subscription sees any command.
-    ReadyAnnouncer(node, [watch])
-    try:
+    with ros_node('world_killer') as node:
+        watch = node.create_subscription(ControlCommand, '/agent_1/cmd', commands.append, STEP)
+        # The test plays the world once after world_sim died: one scan, to which agent 1 must
+        # answer once (it resumes when scans come again).
+        scan = node.create_publisher(MeasurementSet, '/agent_1/measurements', STEP)
+        # world_sim waits for this watcher: a lock-step run can outpace a late-matched reader.
+        announce(node, [watch])
         with started(agent, tmp_path / 'agent_1.log') as a1, \
-                started(other, tmp_path / 'agent_2.log'), \
+                started(other, tmp_path / 'agent_2.log') as a2, \
                 started(world, tmp_path / 'world.log') as w:
-            deadline = time.monotonic() + 120
-            while (not commands or commands[-1][1] < 10) and time.monotonic() < deadline:
-                rclpy.spin_once(node, timeout_sec=0.05)
-            assert commands, 'the run never started'
+            spin_until(node, lambda: commands and commands[-1].step >= 10, 120,
+                       "agent 1's commands up to step 10", (a1, a2, w))
             os.killpg(w.pid, signal.SIGKILL)
             w.wait()
-            killed = time.monotonic()
-            while a1.poll() is None and time.monotonic() - killed < world_timeout + 20:
-                rclpy.spin_once(node, timeout_sec=0.05)
-            gone = time.monotonic() - killed
-            assert a1.returncode == 0, (tmp_path / 'agent_1.log').read_text()[-2000:]
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    assert world_timeout <= gone <= world_timeout + 10
-    # It held: no command after the world died (at most the one of the step in flight).
-    assert len([t for t, _ in commands if t > killed + 0.5]) == 0
-    assert 'world_sim is gone, exiting' in (tmp_path / 'agent_1.log').read_text()
+            wait_matched(node, [scan], 30, "the test's scan writer matching agent 1")
+            position = commands[-1].target_position
+            sent_at = time.monotonic()
+            scan.publish(MeasurementSet(agent_id=1, step=resume_step, agent_position=position))
+            spin_until(node, lambda: any(c.step == resume_step for c in commands), 30,
+                       'agent 1 answering the scan sent after world_sim died', (a1,))
+            spin_until(node, lambda: a1.poll() is not None, world_timeout + 10,
+                       f'agent 1 exiting {world_timeout} s after its last scan')
+            gone = time.monotonic() - sent_at
+            log = (tmp_path / 'agent_1.log').read_text()
+            assert a1.returncode == 0, log[-2000:]
+    assert 'world_sim is gone, exiting' in log
+    # It waited world_timeout after its last scan (received after sent_at), and not much more.
+    assert world_timeout <= gone <= world_timeout + scaled(10)
+    # It only ever answered scans, once each: no command while no scan came, none twice.
+    steps = [c.step for c in commands]
+    assert steps == sorted(set(steps)), steps
+    assert steps[-1] == resume_step, 'agent 1 sent commands after its last scan'

@@ -10,9 +10,6 @@ class FakeNode:
     def __init__(self):
         self.warnings = []
 
-    def declare_parameter(self, name, default):
-        return type('Param', (), {'value': default})()
-
     def create_publisher(self, *args):
         return None
 
@@ -30,7 +27,7 @@ def test_warnings_are_throttled_per_reason_and_count_what_they_skipped(monkeypat
     clock = [100.0]
     monkeypatch.setattr(input_guard.time, 'monotonic', lambda: clock[0])
     node = FakeNode()
-    guard = InputGuard(node, 'test')
+    guard = InputGuard(node, 'test', 1.0)
     for _ in range(5):
         guard.drop('stale_step', 'old')
     guard.drop('nan', 'bad')

@@ -3,14 +3,13 @@
 import signal
 import subprocess
 import sys
-import time
 
 from conftest import TESTS_DIR
 from msg_samples import message_class, plain, samples, sat_msg_names
 import pytest
-import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.serialization import deserialize_message, serialize_message
+from ros_harness import ros_node, scaled, spin_until
 
 from sat_world_sim.bag_types import sat_typestore
 
@@ -49,28 +48,27 @@ def test_samples_fill_every_field():
 def test_two_processes_round_trip_every_type_over_dds():
     sent = samples()
     peer = subprocess.Popen([sys.executable, str(TESTS_DIR / 'roundtrip_peer.py'),
-                             '--timeout', '90'])
-    rclpy.init()
-    node = rclpy.create_node('sat_msgs_roundtrip_test')
+                             '--timeout', str(scaled(90))])
     received = {}
     try:
-        publishers = []
-        for name, msg in sent.items():
-            cls = type(msg)
-            node.create_subscription(cls, f'/sat_roundtrip/pong/{name}',
-                                     lambda m, name=name: received.setdefault(name, m), LATCHED)
-            publishers.append(node.create_publisher(cls, f'/sat_roundtrip/ping/{name}', LATCHED))
-            publishers[-1].publish(msg)
-        deadline = time.monotonic() + 60.0
-        while len(received) < len(sent) and time.monotonic() < deadline:
-            rclpy.spin_once(node, timeout_sec=0.1)
+        with ros_node('sat_msgs_roundtrip_test') as node:
+            publishers = []
+            for name, msg in sent.items():
+                cls = type(msg)
+                node.create_subscription(
+                    cls, f'/sat_roundtrip/pong/{name}',
+                    lambda m, name=name: received.setdefault(name, m), LATCHED)
+                publishers.append(node.create_publisher(cls, f'/sat_roundtrip/ping/{name}',
+                                                        LATCHED))
+                publishers[-1].publish(msg)
+            # Latched both ways: what was published before the peer matched reaches it anyway.
+            spin_until(node, lambda: len(received) == len(sent), 60, 'an echo of every type',
+                       (peer,))
             assert peer.poll() is None, f'peer exited early with {peer.returncode}'
     finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
         peer.send_signal(signal.SIGINT)
         try:
-            peer.wait(timeout=10)
+            peer.wait(timeout=scaled(10))
         except subprocess.TimeoutExpired:
             peer.kill()
             peer.wait()

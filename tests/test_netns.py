@@ -12,6 +12,7 @@ import sys
 import xml.etree.ElementTree as ET
 
 import pytest
+from ros_harness import scaled
 
 from sat_agent.message_auth import create_key_file
 from sat_world_sim import netns
@@ -115,21 +116,23 @@ def exchange(tmp_path, discovery: str, listen_timeout: float):
             server_profile = tmp_path / 'server.xml'
             server_profile.write_text(discovery_server_xml(net.address['server']))
             started.append(subprocess.Popen(
-                net.command('server', [*PEER, 'serve', '--timeout', '120']),
+                net.command('server', [*PEER, 'serve', '--timeout', str(scaled(120))]),
                 env=discovery_server_env(os.environ, server_profile)))
         talker = subprocess.Popen(net.command('a', [*PEER, 'talk', '--key-file', str(key),
-                                                    '--timeout', '120']), env=env('a'))
+                                                    '--timeout', str(scaled(120))]),
+                                  env=env('a'))
         started.append(talker)
         try:
             listener = subprocess.run(
                 net.command('b', [*PEER, 'listen', '--key-file', str(key), '--timeout',
                                   str(listen_timeout)]),
-                env=env('b'), capture_output=True, text=True, timeout=listen_timeout + 30)
+                env=env('b'), capture_output=True, text=True,
+                timeout=listen_timeout + scaled(30))
             maps = Path(f'/proc/{talker.pid}/maps').read_text()
         finally:
             for process in started:
                 process.terminate()
-                process.wait(timeout=10)
+                process.wait(timeout=scaled(10))
     return listener, maps
 
 
@@ -138,7 +141,7 @@ def exchange(tmp_path, discovery: str, listen_timeout: float):
 @pytest.mark.timeout(180)
 @pytest.mark.parametrize('discovery', ['static_peers', 'discovery_server'])
 def test_two_namespaces_exchange_verified_messages_over_udp(tmp_path, discovery):
-    listener, talker_maps = exchange(tmp_path, discovery, listen_timeout=60)
+    listener, talker_maps = exchange(tmp_path, discovery, listen_timeout=scaled(60))
     assert listener.returncode == 0, listener.stdout + listener.stderr
     assert listener.stdout.count('verified step') >= 5 and 'refused' not in listener.stdout
     # The data went over the veth: the talker never mapped Fast DDS's shared memory.
@@ -149,5 +152,5 @@ def test_two_namespaces_exchange_verified_messages_over_udp(tmp_path, discovery)
 @pytest.mark.ros
 @pytest.mark.timeout(120)
 def test_with_localhost_discovery_only_the_namespaces_do_not_find_each_other(tmp_path):
-    listener, _ = exchange(tmp_path, 'localhost', listen_timeout=10)
+    listener, _ = exchange(tmp_path, 'localhost', listen_timeout=scaled(10))
     assert listener.returncode == 1 and 'verified' not in listener.stdout

@@ -3,21 +3,13 @@
 import signal
 import subprocess
 import sys
-import time
 
+from diagnostic_msgs.msg import DiagnosticArray
 import pytest
-from ros_harness import executable, PARAMS, started
+from ros_harness import executable, PARAMS, ros_node, scaled, spin_until, started, wait_exit
 
 
-def wait_for(path, text: str, timeout: float) -> bool:
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if text in path.read_text(encoding='utf-8'):
-            return True
-        time.sleep(0.1)
-    return False
-
-
+@pytest.mark.ros
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize('number', [signal.SIGINT, signal.SIGTERM])
 def test_an_agent_stopped_by_a_signal_exits_0_without_an_error(tmp_path, number):
@@ -26,12 +18,15 @@ def test_an_agent_stopped_by_a_signal_exits_0_without_an_error(tmp_path, number)
     # EventsExecutor logged as FATAL (seen at the end of a `make run`).
     log = tmp_path / 'agent.log'
     command = [executable('sat_agent', 'agent'), '--ros-args', '--params-file', str(PARAMS),
-               '-r', '__ns:=/agent_9', '-p', 'agent_id:=9']
-    with started(command, log) as agent:
-        assert wait_for(log, 'agent 9 ready', 60.0), log.read_text()
-        time.sleep(0.5)
+               '-r', '__ns:=/agent_9', '-p', 'agent_id:=9', '-p', 'diagnostics_period:=0.05']
+    spinning = []
+    with ros_node('signal_sender') as node, started(command, log) as agent:
+        # The agent's diagnostics timer has fired: its executor is spinning its callbacks.
+        node.create_subscription(DiagnosticArray, '/diagnostics', lambda m: spinning.extend(
+            s.name for s in m.status if s.name.startswith('/agent_9/')), 10)
+        spin_until(node, lambda: spinning, 60, "agent 9's first /diagnostics", (agent,))
         agent.send_signal(number)
-        assert agent.wait(timeout=10.0) == 0, log.read_text()
+        assert wait_exit(agent, 10, f'agent 9 exiting on {number.name}') == 0, log.read_text()
     output = log.read_text(encoding='utf-8')
     assert 'FATAL' not in output and 'Traceback' not in output, output
 
@@ -58,7 +53,7 @@ sys.exit(run_nodes('self_signalling', Node_))
 @pytest.mark.parametrize('name', ['SIGINT', 'SIGTERM'])
 def test_a_signal_inside_a_callback_lets_the_callback_finish_and_the_process_exit_0(name):
     result = subprocess.run([sys.executable, '-c', SELF_SIGNALLING_NODE.format(name=name)],
-                            capture_output=True, text=True, timeout=30)
+                            capture_output=True, text=True, timeout=scaled(30))
     output = result.stdout + result.stderr
     assert result.returncode == 0, output
     assert 'callback returned' in output and 'FATAL' not in output, output

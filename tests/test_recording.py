@@ -3,11 +3,9 @@
 from collections import Counter
 import subprocess
 import sys
-import time
 
 import pytest
-import rclpy
-from ros_harness import executable
+from ros_harness import executable, ros_node, scaled, spin_until
 from rosbags.rosbag2 import Reader
 
 from sat_agent.ros.msg_conversions import message_class
@@ -64,7 +62,7 @@ def test_offline_replay_of_the_paper_bag_gives_the_live_metrics(paper_run, tmp_p
     out = tmp_path / 'replay'
     result = subprocess.run([executable('sat_world_sim', 'replay'), str(run_dir / 'bag'),
                              '--offline', '--out', str(out)],
-                            capture_output=True, text=True, timeout=300)
+                            capture_output=True, text=True, timeout=scaled(300))
     assert result.returncode == 0, result.stderr[-3000:]
     assert result.stdout.strip().splitlines()[-1] == str(out)
     assert (out / 'metrics.json').read_text() == (run_dir / 'metrics.json').read_text()
@@ -79,32 +77,30 @@ def test_republishing_the_bag_delivers_every_message(paper_run):
     bag = run_dir / 'bag'
     with Reader(bag) as reader:
         in_bag = Counter(c.topic for c, _, _ in reader.messages())
-    rclpy.init()
-    node = rclpy.create_node('replay_listener')
     got = Counter()
-    try:
+    with ros_node('replay_listener') as node:
         for topic in graph_topics((1, 2)):
             node.create_subscription(message_class(topic.msgtype), topic.name,
                                      lambda _, name=topic.name: got.update([name]),
                                      deep(topic_qos(topic)))
+        # The replay publishes once each of its writers matched this node's reader (a writer
+        # drops what it wrote before, for a reader it matches later).
         replay = subprocess.Popen([executable('sat_world_sim', 'replay'), str(bag),
-                                   '--rate', '5'], stderr=subprocess.PIPE, text=True)
+                                   '--rate', '5', '--match-timeout', str(scaled(60))],
+                                  stderr=subprocess.PIPE, text=True)
         try:
-            deadline = time.monotonic() + 240
-            while replay.poll() is None and time.monotonic() < deadline:
-                rclpy.spin_once(node, timeout_sec=0.05)
-            # The replay waited for every message to be acknowledged; drain what is queued.
-            end = time.monotonic() + 60.0
-            while time.monotonic() < end and got != in_bag:
-                rclpy.spin_once(node, timeout_sec=0.05)
+            spin_until(node, lambda: replay.poll() is not None, 240,
+                       'the replay publishing the whole bag')
+            stderr = replay.communicate()[1]
+            assert replay.returncode == 0, stderr[-3000:]
+            assert 'not acknowledged' not in stderr, stderr[-3000:]
+            # Every message was acknowledged, so it is in this node's queues.
+            spin_until(node, lambda: all(got[t] >= n for t, n in in_bag.items()), 60,
+                       'every replayed message taken from the queues')
         finally:
             if replay.poll() is None:
                 replay.kill()
-            stderr = replay.communicate()[1]
-        assert replay.returncode == 0, stderr[-3000:]
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+                replay.communicate()
     assert got == in_bag
 
 

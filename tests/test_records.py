@@ -52,3 +52,27 @@ def test_a_message_of_a_settled_step_is_dropped():
     assert (2, 2) not in collector.statuses
     record = collector.records()[1]
     assert record.step == 2 and set(record.modes) == {1}
+
+
+def test_statuses_later_than_other_topics_by_more_than_the_window_still_count():
+    # DDS orders each writer's messages, not messages across topics: agent 2's statuses can
+    # come after the world's truths of many later steps (a loss repaired on a loaded machine).
+    steps = SETTLE_STEPS + 15
+    delay = SETTLE_STEPS + 5
+    messages = list(synthetic_messages(steps))
+    held = [(t, m) for t, m in messages if t == '/agent_2/status']
+    delayed = []
+    for topic, msg in messages:
+        if topic == '/agent_2/status':
+            continue
+        delayed.append((topic, msg))
+        while topic == '/world/truth' and held and held[0][1].step + delay <= msg.step:
+            delayed.append(held.pop(0))
+    delayed += held
+    collector = RunCollector(AGENTS)
+    for topic, msg in delayed:
+        collector.add(topic, msg)
+    records = collector.records()
+    assert all(set(r.modes) == {1, 2} for r in records)
+    assert compute_metrics(records, 'synthetic', 1) == \
+        compute_metrics(every_step_record(messages), 'synthetic', 1)

@@ -8,7 +8,7 @@ import subprocess
 from geometry_msgs.msg import Point
 import pytest
 from rerun.chunk import RrdReader
-from ros_harness import executable, PARAMS, REPO, started
+from ros_harness import executable, PARAMS, REPO, scaled, started, wait_exit
 
 from sat_agent.density_codec import encode_density
 from sat_msgs.msg import (AgentStatus, AgentTruth, GridInfo, GroundTruth, RadioTraffic,
@@ -123,7 +123,7 @@ def test_write_rrd_replays_topic_messages_in_step_order_and_skips_what_is_missin
     messages = [(t, m) for t, m in synthetic_messages(steps)
                 if not (t == '/agent_2/status' and m.step == 3)]
     messages.insert(0, ('/agent_9/status', AgentStatus(agent_id=9, step=1)))
-    messages.insert(0, ('/world/observers', None))
+    messages.insert(0, ('/world/ready', None))
     count = rerun_view.write_rrd(messages, tmp_path / 'run.rrd', AGENTS, area=(100.0, 50.0))
     assert count == steps
     logged, static = rrd_contents(tmp_path / 'run.rrd')
@@ -194,7 +194,7 @@ def test_logger_node_records_a_short_swarm_run(tmp_path):
             started(world, tmp_path / 'world.log'), \
             started(agent(1), tmp_path / 'a1.log'), \
             started(agent(2), tmp_path / 'a2.log'):
-        code = log_process.wait(timeout=200)
+        code = wait_exit(log_process, 200, 'the logger writing run.rrd after the run')
     assert code == 0, (tmp_path / 'logger.log').read_text()[-3000:]
     logged, static = rrd_contents(run_dir / 'run.rrd')
     for entity in expected_per_step(AGENTS):
@@ -208,10 +208,10 @@ def test_logger_node_records_a_short_swarm_run(tmp_path):
 def test_logger_node_refuses_an_unknown_sink(tmp_path):
     command = [executable('sat_world_sim', 'logger'), '--ros-args',
                '-p', f'run_dir:={tmp_path}', '-p', 'sink:=screen']
-    result = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    result = subprocess.run(command, capture_output=True, text=True, timeout=scaled(60))
     assert result.returncode == 2
     assert "parameter 'sink' = 'screen'" in result.stderr
-    assert 'file, viewer, web' in result.stderr
+    assert "allowed values are ['file', 'viewer', 'web']" in result.stderr
 
 
 @pytest.mark.ros

@@ -7,19 +7,20 @@ start: the agent must find it and report it on its standard views. Input it cann
 pose yet, an unknown frame, a malformed cloud) is dropped and counted on /diagnostics.
 """
 
+import json
 import math
-import time
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import PoseArray, PoseStamped
 import numpy as np
 import pytest
-import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from ros_harness import executable, PARAMS, started
+from ros_harness import executable, PARAMS, ros_node, spin_until, started
 from sensor_msgs.msg import PointCloud2, PointField
+from std_msgs.msg import String
 
 from sat_agent.config import load_params_file
+from sat_agent.ros import readiness
 from sat_agent.ros.msg_conversions import header, InvalidMessage
 from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotPose
 from sat_agent.stamps import agent_frame, MAP_FRAME
@@ -91,7 +92,7 @@ def _truncated() -> PointCloud2:
 
 
 class Drone:
-    """The scripted robot: pose and detections out, goals and views in."""
+    """The scripted robot: pose and detections out, goals, views and the agent's counters in."""
 
     def __init__(self, node):
         ns = f'/agent_{AGENT}'
@@ -99,11 +100,13 @@ class Drone:
         self.pose_pub = node.create_publisher(PoseStamped, f'{ns}/robot/pose', RELIABLE)
         self.scan_pub = node.create_publisher(PointCloud2, f'{ns}/robot/detections', RELIABLE)
         self.goals, self.estimates, self.counters = {}, {}, None
+        self.goal_readers = 0     # the agent's view: readers its robot/goal writer matched
         node.create_subscription(PoseStamped, f'{ns}/robot/goal', self.on_goal, RELIABLE)
         node.create_subscription(PoseArray, f'{ns}/view/estimate_poses',
                                  lambda m: self.estimates.__setitem__(m.header.stamp.sec, m),
                                  LATCHED)
         node.create_subscription(DiagnosticArray, '/diagnostics', self.on_diagnostics, 10)
+        node.create_subscription(String, readiness.TOPIC, self.on_announcement, readiness.QOS)
 
     def on_goal(self, msg):
         self.goals[round(msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9)] = msg
@@ -113,12 +116,12 @@ class Drone:
             if status.hardware_id == f'agent_{AGENT}':
                 self.counters = {kv.key: int(kv.value) for kv in status.values}
 
-    def spin_until(self, done, timeout: float, agent) -> bool:
-        deadline = time.monotonic() + timeout
-        while not done() and time.monotonic() < deadline:
-            rclpy.spin_once(self.node, timeout_sec=0.05)
-            assert agent.poll() is None, 'the agent died'
-        return done()
+    def on_announcement(self, msg):
+        writes = json.loads(msg.data)['writes']
+        self.goal_readers = writes.get(f'/agent_{AGENT}/robot/goal', self.goal_readers)
+
+    def count(self, key: str) -> int:
+        return (self.counters or {}).get(key, 0)
 
 
 @pytest.mark.ros
@@ -127,41 +130,42 @@ def test_an_agent_driven_only_by_pose_and_detections_finds_the_target_and_sends_
     command = [executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{AGENT}',
                '--params-file', str(PARAMS), '-p', f'agent_id:={AGENT}',
                '-p', 'input_source:=robot', '-p', 'diagnostics_period:=0.2']
-    rclpy.init()
-    node = rclpy.create_node('scripted_drone')
-    drone = Drone(node)
-    try:
+    with ros_node('scripted_drone') as node:
+        drone = Drone(node)
         with started(command, tmp_path / 'agent.log') as agent:
-            # Matched both ways: the agent's subscriptions and its /diagnostics.
-            assert drone.spin_until(lambda: drone.pose_pub.get_subscription_count() > 0
-                                    and drone.scan_pub.get_subscription_count() > 0
-                                    and drone.counters is not None, 60, agent)
+            def wait(done, what):
+                spin_until(node, done, 30, what, (agent,))
+            # Matched both ways: the drone's writers the agent's readers, the agent's goal
+            # writer the drone's reader (its announcement), and its /diagnostics.
+            spin_until(node, lambda: drone.pose_pub.get_subscription_count() > 0
+                       and drone.scan_pub.get_subscription_count() > 0
+                       and drone.goal_readers > 0 and drone.counters is not None, 60,
+                       "the drone's topics matched both ways and the agent's diagnostics",
+                       (agent,))
             # A scan before any pose, and one in a frame without TF, are refused.
             drone.scan_pub.publish(cloud([[1.0, 1.0]], MAP_FRAME, 1))
-            assert drone.spin_until(lambda: drone.counters.get('dropped.no_pose'), 30, agent)
+            wait(lambda: drone.count('dropped.no_pose'), 'the scan before any pose dropped')
             position = START.copy()
             for step in range(1, STEPS + 1):
                 drone.pose_pub.publish(pose(position, step))
-                drone.spin_until(lambda: False, 0.1, agent)    # the pose goes first
+                # DDS does not order the two topics: the scan goes once the pose is taken.
+                wait(lambda: drone.count('accepted.robot/pose') == step,
+                     f'the pose of step {step} accepted')
                 frame = MAP_FRAME if step != 5 else 'camera'
                 drone.scan_pub.publish(cloud([TARGET], frame, step))
                 if step == 5:
-                    assert drone.spin_until(
-                        lambda: drone.counters.get('dropped.unknown_frame'), 30, agent)
+                    wait(lambda: drone.count('dropped.unknown_frame'),
+                         'the scan in an unknown frame dropped')
                     continue
-                assert drone.spin_until(lambda: step in drone.goals, 30, agent), \
-                    (tmp_path / 'agent.log').read_text()[-2000:]
+                wait(lambda: step in drone.goals, f'the goal of step {step}')
                 goal = drone.goals[step]
                 target = np.array([goal.pose.position.x, goal.pose.position.y])
                 assert goal.header.frame_id == MAP_FRAME
                 assert np.linalg.norm(target - position) <= 4.0 + 1e-9   # N_R * Delta_R
                 position = target       # the drone flies to its goal
-            assert drone.spin_until(lambda: STEPS in drone.estimates, 30, agent)
-            assert drone.spin_until(
-                lambda: drone.counters.get('accepted.robot/detections') == STEPS - 1, 30, agent)
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+            wait(lambda: STEPS in drone.estimates, f'the estimates of step {STEPS}')
+            wait(lambda: drone.count('accepted.robot/detections') == STEPS - 1,
+                 'the counters of every scan')
     assert sorted(drone.goals) == [s for s in range(1, STEPS + 1) if s != 5]
     found = [[p.position.x, p.position.y] for p in drone.estimates[STEPS].poses]
     assert len(found) == 1 and np.linalg.norm(np.array(found[0]) - TARGET) < 1.5

@@ -14,6 +14,7 @@ import sys
 import xml.etree.ElementTree as ElementTree
 
 from conftest import REPO_ROOT
+from ros_harness import scaled
 
 PACKAGES = (REPO_ROOT / 'src' / 'sat_agent' / 'sat_agent',
             REPO_ROOT / 'src' / 'sat_world_sim' / 'sat_world_sim')
@@ -76,7 +77,7 @@ def test_importing_the_core_loads_no_ros_module():
             f'for name in {names!r}:\n    importlib.import_module(name)\n'
             'print(sorted({m.split(".")[0] for m in sys.modules}))\n')
     result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
-                            timeout=120)
+                            timeout=scaled(120))
     assert result.returncode == 0, result.stderr
     loaded = [name for name in eval(result.stdout) if ROS_MODULE.match(name)]
     assert loaded == []

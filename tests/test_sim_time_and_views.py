@@ -7,13 +7,12 @@ with /clock, and its timers keep running while the sim clock stands still.
 """
 
 from pathlib import Path
-import time
 
 from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 import pytest
-import rclpy
-from ros_harness import executable, PARAMS, run_swarm, started, write_scenario
+from ros_harness import (executable, PARAMS, ros_node, run_swarm, spin_until, started,
+                         wait_matched, write_scenario)
 from rosbags.highlevel import AnyReader
 from rosgraph_msgs.msg import Clock
 
@@ -184,31 +183,26 @@ def test_an_agent_on_sim_time_reads_clock_and_its_timers_run_while_the_clock_sta
     command = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_5',
                '--params-file', str(PARAMS), '-p', 'agent_id:=5', '-p', 'use_sim_time:=true',
                '-p', 'diagnostics_period:=0.2']
-    rclpy.init()
-    node = rclpy.create_node('sim_clock')
-    clock = node.create_publisher(Clock, '/clock', 10)
-    stamps = []
-    node.create_subscription(
-        DiagnosticArray, '/diagnostics',
-        lambda m: stamps.extend(m.header.stamp.sec for s in m.status
-                                if s.hardware_id == 'agent_5'), 10)
-    try:
+    with ros_node('sim_clock') as node:
+        clock = node.create_publisher(Clock, '/clock', 10)
+        stamps = []
+        node.create_subscription(
+            DiagnosticArray, '/diagnostics',
+            lambda m: stamps.extend(m.header.stamp.sec for s in m.status
+                                    if s.hardware_id == 'agent_5'), 10)
         with started(command, tmp_path / 'agent.log') as agent:
-            deadline = time.monotonic() + 60
-            while time.monotonic() < deadline and (not stamps or stamps[-1] != 42):
-                clock.publish(Clock(clock=step_time_msg(42)))
-                rclpy.spin_once(node, timeout_sec=0.1)
-            assert agent.poll() is None
+            # rclpy reads /clock best effort, keep last 1: a sample sent before the agent's
+            # reader matched this writer is lost, so the test is a clock source that keeps
+            # publishing the time (standing at 42 s), as a simulator does.
+            wait_matched(node, [clock], 60, "the test's /clock writer matching the agent")
+            node.create_timer(0.1, lambda: clock.publish(Clock(clock=step_time_msg(42))))
+            spin_until(node, lambda: stamps and stamps[-1] == 42, 60,
+                       'a diagnostics message stamped with the published sim time', (agent,))
             # The clock stands at 42 s: the diagnostics timer (steady) still fires.
             seen = len(stamps)
-            end = time.monotonic() + 2.0
-            while time.monotonic() < end:
-                rclpy.spin_once(node, timeout_sec=0.1)
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
-    assert stamps and stamps[seen - 1] == 42
-    assert len(stamps) - seen >= 4 and set(stamps[seen:]) == {42}
+            spin_until(node, lambda: len(stamps) - seen >= 4, 30,
+                       'four more diagnostics while the sim clock stands', (agent,))
+    assert stamps[seen - 1] == 42 and set(stamps[seen:]) == {42}
 
 
 def step_time_msg(step: int):

@@ -11,16 +11,15 @@ import time
 
 import numpy as np
 import pytest
-import rclpy
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from ros_harness import executable, PARAMS, REPO, run_swarm, started, write_scenario
+from ros_harness import (announce, executable, PARAMS, REPO, ros_node, run_swarm, scaled,
+                         spin_until, started, wait_exit, write_scenario)
 
 from sat_agent.config import load_params_file
-from sat_msgs.msg import AgentStatus, SearchDensity, WorldStep
+from sat_msgs.msg import AgentStatus, GroundTruth, SearchDensity, WorldStep
 from sat_world_sim.inprocess_swarm import run_swarm as run_inprocess
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.records import density_values
-from sat_world_sim.ros.observer import ReadyAnnouncer
 from sat_world_sim.scenario import load_scenario
 
 pytestmark = pytest.mark.ros
@@ -44,13 +43,17 @@ def agent_command(agent_id):
 
 
 class Observer:
-    """Records /world/step, every agent's status and the search densities they send."""
+    """Records /world/step and /world/truth, every agent's status and the densities they send."""
 
     def __init__(self, node, agent_ids):
         self.steps, self.finished = [], False
+        self.truth = {}          # step -> GroundTruth
         self.status = {}         # (agent, step) -> AgentStatus
         self.density = {}        # (agent, step) -> (ny, nx) values sent
-        subscriptions = [node.create_subscription(WorldStep, '/world/step', self.on_step, WORLD)]
+        subscriptions = [node.create_subscription(WorldStep, '/world/step', self.on_step, WORLD),
+                         node.create_subscription(
+                             GroundTruth, '/world/truth',
+                             lambda m: self.truth.__setitem__(m.step, m), WORLD)]
         for i in agent_ids:
             subscriptions.append(node.create_subscription(
                 AgentStatus, f'/agent_{i}/status',
@@ -61,40 +64,34 @@ class Observer:
                     (i, m.step), density_values(m)),
                 RELIABLE))
         # world_sim starts step 1 once this observer says it sees every topic.
-        self.ready = ReadyAnnouncer(node, subscriptions)
+        self.ready = announce(node, subscriptions)
 
     def on_step(self, msg):
         self.steps.append((time.monotonic(), msg.step))
         self.finished = self.finished or msg.finished
 
 
-def spin_until(node, done, timeout, processes=()):
-    deadline = time.monotonic() + timeout
-    while not done() and time.monotonic() < deadline:
-        rclpy.spin_once(node, timeout_sec=0.05)
-        for process in processes:
-            assert process.poll() in (None, 0), f'process {process.args[0]} died'
-    return done()
-
-
 @pytest.fixture
-def ros_node():
-    rclpy.init()
-    node = rclpy.create_node('swarm_test_observer')
-    yield node
-    node.destroy_node()
-    rclpy.try_shutdown()
+def watcher():
+    with ros_node('swarm_test_observer') as node:
+        yield node
 
 
 @pytest.mark.timeout(240)
-def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, ros_node):
-    observer = Observer(ros_node, (1, 2))
+def test_first_contact_fuses_densities_and_both_adopt_one_joint_plan(tmp_path, watcher):
+    observer = Observer(watcher, (1, 2))
     world = world_command(PAPER, 'steps:=60', 'observers:=1')
     with started(world, tmp_path / 'world.log') as w, \
             started(agent_command(1), tmp_path / 'a1.log') as a1, \
             started(agent_command(2), tmp_path / 'a2.log') as a2:
-        assert spin_until(ros_node, lambda: observer.finished, 180, (w, a1, a2))
-        spin_until(ros_node, lambda: (2, 60) in observer.status and (1, 60) in observer.status, 5)
+        spin_until(watcher, lambda: observer.finished, 180, 'the 60-step run finishing',
+                   (w, a1, a2))
+        # Other topics than /world/step: their last step may come after it. Each writer
+        # delivers in order, so its step 60 comes after all its earlier ones.
+        last = [(i, 60) for i in (1, 2)]
+        spin_until(watcher,
+                   lambda: all(k in observer.status and k in observer.density for k in last),
+                   30, "both agents' status and density of step 60", (a1, a2))
     joint = sorted(k for k in range(1, 61)
                    if all(list(observer.status[(i, k)].group) == [1, 2] for i in (1, 2)))
     assert joint, 'the agents never planned together'
@@ -227,27 +224,36 @@ def test_two_trackers_on_the_same_target_end_with_one_tracking(tmp_path):
 
 
 @pytest.mark.timeout(300)
-def test_a_killed_agent_stalls_the_world_at_most_the_timeout(tmp_path, ros_node):
-    observer = Observer(ros_node, ())
+def test_a_killed_agent_stalls_the_world_at_most_the_timeout(tmp_path, watcher):
+    observer = Observer(watcher, ())
     timeout = 3.0
+    steps = 80
     run_dir = tmp_path / 'run'
-    world = world_command(PAPER, 'steps:=80', 'observers:=2', f'agent_timeout:={timeout}')
+    world = world_command(PAPER, f'steps:={steps}', 'observers:=2', f'agent_timeout:={timeout}')
     metrics = [executable('sat_world_sim', 'metrics'), '--ros-args', '--params-file',
                str(PARAMS), '-p', f'run_dir:={run_dir}', '-p', 'agent_ids:=[1,2]']
     with started(world, tmp_path / 'world.log') as w, \
             started(metrics, tmp_path / 'metrics.log') as m, \
             started(agent_command(1), tmp_path / 'a1.log'), \
             started(agent_command(2), tmp_path / 'a2.log') as a2:
-        assert spin_until(ros_node, lambda: observer.steps and observer.steps[-1][1] >= 30, 120)
+        spin_until(watcher, lambda: observer.steps and observer.steps[-1][1] >= 30, 120,
+                   '/world/step reaching step 30', (w, m))
         os.kill(a2.pid, signal.SIGKILL)
         a2.wait()
-        killed_at = observer.steps[-1][1]
-        assert spin_until(ros_node, lambda: observer.finished, 120, (w,))
-        m.wait(timeout=30)
-        assert m.returncode == 0
+        spin_until(watcher, lambda: observer.finished and steps in observer.truth, 120,
+                   'the run finishing', (w, m))
+        assert wait_exit(m, 30, 'metrics writing metrics.json') == 0, \
+            (tmp_path / 'metrics.log').read_text()[-3000:]
+    # Between two steps the world waited at most the timeout (and the messages' way here).
     gaps = np.diff([t for t, _ in observer.steps])
-    assert gaps.max() <= timeout + 1.5, f'world stalled {gaps.max():.1f} s'
+    assert gaps.max() <= timeout + scaled(1.5), f'world stalled {gaps.max():.1f} s'
     result = json.loads((run_dir / 'metrics.json').read_text())
-    assert [s['step'] for s in result['steps']] == list(range(1, 81))
-    later = [s for s in result['steps'] if s['step'] > killed_at + 1]
-    assert all(list(s['modes']) == ['1'] for s in later), 'a dead agent still reported'
+    assert [s['step'] for s in result['steps']] == list(range(1, steps + 1))
+    # Agent 2 reported up to some step, never after: its last report came before the world
+    # marked it inactive, one step later (or two, killed between its status and command).
+    reported = [s['step'] for s in result['steps'] if '2' in s['modes']]
+    assert reported == list(range(1, len(reported) + 1)), 'a dead agent still reported'
+    inactive = [k for k, truth in sorted(observer.truth.items())
+                if not next(a.active for a in truth.agents if a.id == 2)]
+    assert inactive and inactive == list(range(inactive[0], steps + 1)), inactive
+    assert len(reported) + 1 <= inactive[0] <= len(reported) + 2

@@ -182,9 +182,9 @@ def test_scans_detect_targets_in_the_square_and_name_their_source():
      "'targets[0].via[0]' = [15, 5.0]: must be a list [k, x, y]"),
     ({'targets': [{'id': 1, 'born': 10, 'died': 20, 'start': [1, 1], 'end': [2, 2],
                    'via': [[15, 5.0, 500.0]]}]},
-     "'targets[0].via[0][2]' = 500.0: allowed range is [0.0, 100.0]"),
+     "'targets[0].via[0][2]' = 500.0: allowed range is [0, 100]"),
     ({'random_births': {'rate': -1.0, 'survival': 0.9, 'speed_std': 1.0}},
-     "'random_births.rate' = -1.0: allowed range is [0.0,"),
+     "'random_births.rate' = -1.0: allowed range is [0,"),
     ({'truth_process_noise': float('nan')}, "'truth_process_noise' = nan"),
 ])
 def test_scenario_validation_names_the_key_the_value_and_what_is_allowed(change, message):

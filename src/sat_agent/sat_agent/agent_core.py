@@ -55,9 +55,10 @@ from sat_agent.beyond_paper.investigation import (
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
 from sat_agent.beyond_paper.track_release import TrackRelease
-from sat_agent.config import SatParams
+from sat_agent.config import ParameterError, SatParams
 from sat_agent.density_codec import encode_density
 from sat_agent.mode_machine import Mode, ModeMachine
+from sat_agent.parameter_schema import changed_names, live_names
 from sat_agent.phd_filter import BirthSpots, SatPhdFilter
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import SearchMap
@@ -202,6 +203,21 @@ class Agent:
         self._previous_searchers: frozenset = frozenset()
         # Step 1 corrects a PHD predicted from "step 0": the births and the start pose.
         self.filter.predict(np.asarray(initial_pose, dtype=float))
+
+    def retune(self, params: SatParams) -> None:
+        """Take new values of live parameters (parameter_schema.Spec.live) from the next step.
+
+        Of those, search.investigate_steps is the core's: the investigation reads it at each
+        look. A change to any other parameter raises ParameterError: the filter, the planners
+        and the mode machine were built from them.
+        """
+        fixed = [name for name in changed_names(self.params, params)
+                 if name not in live_names(SatParams)]
+        if fixed:
+            raise ParameterError(f'parameter(s) {fixed} are read-only: they are set at start-up')
+        self.params = params
+        if isinstance(self.investigation, Investigation):
+            self.investigation.params = params
 
     @property
     def mode(self) -> Mode:

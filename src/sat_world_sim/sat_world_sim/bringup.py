@@ -29,7 +29,6 @@ import argparse
 from dataclasses import dataclass, field
 import os
 from pathlib import Path
-import random
 import shlex
 import signal
 import subprocess
@@ -42,6 +41,7 @@ from ament_index_python.packages import get_package_prefix, get_package_share_di
 
 from sat_agent.config import load_params_file, ParameterError
 
+from sat_world_sim.domain_ids import claim_domain_id, NoFreeDomain
 from sat_world_sim.scenario import load_scenario, ScenarioError
 
 STOP_GRACE_S = 5.0
@@ -149,11 +149,6 @@ def _prefix_lines(name: str, stream, log, echo: bool):
     stream.close()
 
 
-def private_domain_id() -> int:
-    """Pick a ROS_DOMAIN_ID for this run only (1..100), so parallel runs do not see each other."""
-    return random.Random(f'{os.getpid()}-{time.time_ns()}').randrange(1, 101)
-
-
 def default_fastdds_profile() -> str:
     """Return the user's FASTRTPS_DEFAULT_PROFILES_FILE, else the installed config/fastdds.xml.
 
@@ -181,8 +176,9 @@ def ros_env(domain_id: Optional[int], fastdds_profile: Optional[str] = None) -> 
     the user says otherwise, and Fast DDS gets fastdds_profile (default_fastdds_profile()).
     """
     env = dict(os.environ)
+    # The bring-up process holds a claimed id (domain_ids) until it exits, after its children.
     env.update(run_env(fastdds_profile or default_fastdds_profile(),
-                       domain_id if domain_id is not None else private_domain_id()))
+                       domain_id if domain_id is not None else claim_domain_id()))
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
     env['PYTHONUNBUFFERED'] = '1'
@@ -304,7 +300,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help='Fast DDS XML profile (default: $FASTRTPS_DEFAULT_PROFILES_FILE, '
                              'else the installed config/fastdds.xml)')
     parser.add_argument('--domain-id', type=int, default=None,
-                        help='ROS_DOMAIN_ID (default: a private one for this run)')
+                        help='ROS_DOMAIN_ID (default: one no other run on this machine holds, '
+                             'from 1..89; sat_world_sim/domain_ids.py)')
     parser.add_argument('--timeout', type=float, default=900.0, help='give up after (s)')
     parser.add_argument('--quiet', action='store_true',
                         help="only write the processes' output to <run-dir>/logs/, not stderr")
@@ -410,14 +407,14 @@ def main(argv=None) -> int:
     options = args if args.print_ros2_run else absolute(args)
     try:
         processes = load_run(options)
-    except (ParameterError, ScenarioError, OSError) as error:
+        if args.print_ros2_run:
+            env = run_env(options.fastdds_profile, options.domain_id)
+            print('\n'.join(ros2_run_lines(processes, env)))
+            return 0
+        env = ros_env(options.domain_id, options.fastdds_profile)
+    except (ParameterError, ScenarioError, OSError, NoFreeDomain) as error:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
-    if args.print_ros2_run:
-        env = run_env(options.fastdds_profile, options.domain_id)
-        print('\n'.join(ros2_run_lines(processes, env)))
-        return 0
-    env = ros_env(options.domain_id, options.fastdds_profile)
     agents = sum(p.executable == 'agent' for p in processes) or 'composed'
     print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {agents} agents, "
           f'{options.clock}, run dir {args.run_dir}', file=sys.stderr)

@@ -18,11 +18,14 @@ from sat_world_sim.plots import write_plots
 from sat_world_sim.topics import agent_of
 
 MODE_NAMES = {0: 'SEARCH', 1: 'TRACK'}
-# A step's record is made once the world's truth is this many steps further on. In lock-step
-# the world waited for every active agent's answer before moving on, so by then everything of
-# that step has arrived; in real time a status this many periods late is left out. The live
-# metrics node and the offline replay of a bag apply the same rule, so they agree.
+# A step's record is made once the world's truth is this many steps further on and the step's
+# messages are all in (RunCollector.settle_ready). DDS does not order messages across topics, so
+# the truth of a later step says nothing about an agent's status of this one; only each writer's
+# own order does. The live metrics node and the offline replay of a bag apply the same rule.
 SETTLE_STEPS = 20
+# ... or once the truth is this many steps further on, whatever is missing: a message this late
+# may have left its writer's history (sat_agent.qos.DEPTH) before it could be repaired.
+LATE_LIMIT_STEPS = 200
 
 
 def _xy(points) -> np.ndarray:
@@ -139,17 +142,46 @@ class RunCollector(StepMessages):
         # agent and step), and whatever fields metrics.StepRecord has, they come back equal.
         self.settled: List[bytes] = []
         self.settled_up_to = 0   # steps up to this one are in self.settled
+        self.newest = {}         # (kind, agent) -> newest step received ('radio', None) too
 
     def add(self, topic: str, msg) -> None:
         """Take one message of the graph; one of a step settled already is dropped."""
-        kind = (route(topic, self.agent_ids) or (None,))[0]
+        kind, agent = route(topic, self.agent_ids) or (None, None)
         # The last settled step's traffic is still needed: the next record is a difference.
         oldest = self.settled_up_to + (0 if kind == 'radio' else 1)
         if kind in ('truth', 'radio', 'status') and int(msg.step) < oldest:
             return
         super().add(topic, msg)
+        if kind in ('radio', 'status'):
+            self.newest[(kind, agent)] = max(self.newest.get((kind, agent), 0), int(msg.step))
         if kind == 'truth':
-            self.settle(int(msg.step) - SETTLE_STEPS)
+            self.settle(self.settle_ready(int(msg.step)))
+
+    def _all_in(self, step: int) -> bool:
+        """Whether no message of step is still to come.
+
+        A message is in, or its writer (which delivers in order) sent a later one already, or
+        (statuses) its agent did not answer the step: it is inactive in the next step's truth.
+        """
+        if step not in self.traffic and self.newest.get(('radio', None), 0) <= step:
+            return False
+        after = self.truths.get(step + 1)
+        inactive = {int(a.id) for a in after.agents if not a.active} if after else set()
+        return all((agent, step) in self.statuses or agent in inactive
+                   or self.newest.get(('status', agent), 0) > step for agent in self.agent_ids)
+
+    def settle_ready(self, newest: int) -> int:
+        """Return the last step that can become a record once the truth of newest is in.
+
+        Steps go in order; each when SETTLE_STEPS behind newest and all its messages are in,
+        or whatever is missing once LATE_LIMIT_STEPS behind.
+        """
+        ready = self.settled_up_to
+        for step in sorted(s for s in self.truths if s <= newest - SETTLE_STEPS):
+            if step > newest - LATE_LIMIT_STEPS and not self._all_in(step):
+                break
+            ready = step
+        return ready
 
     def keep_density(self, agent: int, step: int, msg) -> None:
         """Store a search density; the metrics only need each agent's last (the final plot)."""

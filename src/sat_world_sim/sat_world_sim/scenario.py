@@ -11,7 +11,7 @@ A scenario is a YAML mapping (see ``config/scenarios/paper.yaml`` and ``random.y
     targets:               # scripted targets (optional); via: optional [k, x, y] waypoints
       - {id: 1, born: 104, died: 179, start: [50.0, 69.0], end: [80.0, 31.0],
          via: [[144, 44.0, 34.0]]}
-    random_births:         # random targets (optional)
+    random_births:         # random targets (optional; a missing key takes the value shown)
       rate: 0.02           # expected births per step, uniform over the area
       survival: 0.99       # per-step survival probability of a random target
       speed_std: 0.5       # m/s, std of each velocity component of a newborn
@@ -22,16 +22,18 @@ k = 179, its death step) and starts with the constant velocity that takes it fro
 ``end`` at ``died`` without one. At a waypoint's step its velocity is set again, from where it
 is to the next waypoint or ``end``; the truth process noise makes it arrive only *near* each.
 Every key is checked; unknown keys and bad values raise ScenarioError naming the key, the value
-and what is allowed.
+and what is allowed. The scalar keys and ``random_births`` are parameter schemas
+(sat_agent.parameter_schema: ScenarioSettings, RandomBirths), the lists' numbers are checked by
+the same Spec.
 """
 
 from dataclasses import dataclass
-import math
 from typing import Any, Mapping, Optional, Tuple
 
 import numpy as np
 
 from sat_agent.config import read_yaml
+from sat_agent.parameter_schema import build, param, ParameterError, Spec
 
 
 class ScenarioError(ValueError):
@@ -80,9 +82,24 @@ class ScriptedTarget:
 class RandomBirths:
     """Random targets: Poisson births anywhere in the area, geometric lifetimes."""
 
-    rate: float
-    survival: float
-    speed_std: float
+    rate: float = param(0.02, 'expected births per step, uniform over the area', low=0,
+                        high=100)
+    survival: float = param(0.99, 'per-step survival probability of a random target', low=0,
+                            high=1)
+    speed_std: float = param(0.5, 'std of each velocity component of a newborn (m/s)', low=0,
+                             high=100)
+
+
+@dataclass(frozen=True)
+class ScenarioSettings:
+    """The scalar keys of a scenario file (seed and steps are required)."""
+
+    name: str = param('unnamed', 'free text, copied into metrics.json')
+    seed: int = param(0, 'seed of the ground truth, the sensors and the agents', low=0,
+                      high=2 ** 63 - 1)
+    steps: int = param(1, 'steps k = 1 .. steps', low=1, high=10 ** 7)
+    truth_process_noise: float = param(0.0, "scale of the paper's Q for the true targets",
+                                       low=0, high=100)
 
 
 @dataclass(frozen=True)
@@ -104,17 +121,17 @@ class Scenario:
 
     def with_seed(self, seed: int) -> 'Scenario':
         """Return a copy with another seed (validated)."""
-        _integer('seed', seed, 0, 2 ** 63 - 1)
-        return Scenario(self.name, int(seed), self.steps, self.truth_process_noise,
+        checked = _schema(ScenarioSettings, {'seed': seed}).seed
+        return Scenario(self.name, checked, self.steps, self.truth_process_noise,
                         self.agents, self.targets, self.random_births)
 
 
 _TOP_KEYS = ('name', 'seed', 'steps', 'truth_process_noise', 'agents', 'targets',
              'random_births')
+_SETTINGS_KEYS = ('name', 'seed', 'steps', 'truth_process_noise')
 _AGENT_KEYS = ('id', 'start')
 _TARGET_KEYS = ('id', 'born', 'died', 'start', 'end')
 _TARGET_OPTIONAL_KEYS = ('via',)
-_BIRTH_KEYS = ('rate', 'survival', 'speed_std')
 
 
 def scenario_from_mapping(document: Any, area_width: float = 100.0,
@@ -126,20 +143,17 @@ def scenario_from_mapping(document: Any, area_width: float = 100.0,
     for key in ('seed', 'steps', 'agents'):
         if key not in document:
             raise ScenarioError(f"scenario key '{key}' is missing: it is required")
-    steps = _integer('steps', document['steps'], 1, 10 ** 7)
+    settings = _schema(ScenarioSettings, {k: document[k] for k in _SETTINGS_KEYS
+                                          if k in document})
     area = (float(area_width), float(area_height))
     agents = _agents(document['agents'], area)
-    targets = _targets(document.get('targets') or [], steps, area)
+    targets = _targets(document.get('targets') or [], settings.steps, area)
     births = document.get('random_births')
     return Scenario(
-        name=str(document.get('name', 'unnamed')),
-        seed=_integer('seed', document['seed'], 0, 2 ** 63 - 1),
-        steps=steps,
-        truth_process_noise=_number('truth_process_noise',
-                                    document.get('truth_process_noise', 0.0), 0.0, 100.0),
-        agents=agents,
-        targets=targets,
-        random_births=None if births is None else _births(births))
+        name=settings.name, seed=settings.seed, steps=settings.steps,
+        truth_process_noise=settings.truth_process_noise, agents=agents, targets=targets,
+        random_births=None if births is None else _schema(RandomBirths, births,
+                                                          'random_births'))
 
 
 def load_scenario(path, area_width: float = 100.0, area_height: float = 100.0) -> Scenario:
@@ -157,20 +171,32 @@ def _known_keys(where: str, mapping: Mapping, allowed) -> None:
         raise ScenarioError(f'{where}: unknown key(s) {unknown}: allowed keys are {list(allowed)}')
 
 
+def _schema(schema, values: Any, key: str = ''):
+    """Build a schema from a scenario mapping; its errors become ScenarioErrors."""
+    if not isinstance(values, Mapping):
+        raise ScenarioError(f"scenario key '{key}' = {values!r}: must be a mapping")
+    try:
+        return build(schema, values, f'{key}.' if key else '')
+    except ParameterError as error:
+        raise ScenarioError(f'scenario {error}') from None
+
+
+def _value(key: str, value: Any, kind: str, low: float, high: float):
+    spec = Spec(key, kind, low=low, high=high)
+    try:
+        checked = spec.convert(key, value)
+        spec.check(key, checked, low)
+    except ParameterError as error:
+        raise ScenarioError(f'scenario {error}') from None
+    return checked
+
+
 def _number(key: str, value: Any, low: float, high: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be a number")
-    if not math.isfinite(value) or not low <= value <= high:
-        raise ScenarioError(f"scenario key '{key}' = {value!r}: allowed range is [{low}, {high}]")
-    return float(value)
+    return _value(key, value, 'float', low, high)
 
 
 def _integer(key: str, value: Any, low: int, high: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ScenarioError(f"scenario key '{key}' = {value!r}: must be an integer")
-    if not low <= value <= high:
-        raise ScenarioError(f"scenario key '{key}' = {value!r}: allowed range is [{low}, {high}]")
-    return int(value)
+    return _value(key, value, 'int', low, high)
 
 
 def _point(key: str, value: Any, area) -> Tuple[float, float]:
@@ -242,17 +268,6 @@ def _waypoints(key: str, value: Any, born: int, died: int, area) -> Tuple[tuple,
                           _number(f'{where}[2]', entry[2], 0.0, area[1])))
         last = step
     return tuple(waypoints)
-
-
-def _births(value: Any) -> RandomBirths:
-    if not isinstance(value, Mapping):
-        raise ScenarioError(
-            f"scenario key 'random_births' = {value!r}: must be a mapping of {list(_BIRTH_KEYS)}")
-    _required('random_births', value, _BIRTH_KEYS)
-    return RandomBirths(rate=_number('random_births.rate', value['rate'], 0.0, 100.0),
-                        survival=_number('random_births.survival', value['survival'], 0.0, 1.0),
-                        speed_std=_number('random_births.speed_std', value['speed_std'],
-                                          0.0, 100.0))
 
 
 def _unique_ids(key: str, ids) -> None:

@@ -11,7 +11,7 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
   ``robot/pose`` (PoseStamped) and ``robot/detections`` (PointCloud2) with
   ``input_source:=robot`` (sub, ROBOT: sat_agent.ros.robot_input says what they hold);
 - ``/world/step`` (sub, WorldStep, WORLD): with world_sim input, the agent exits (code 0)
-  when the world says the run is ``finished``;
+  when the world says the run is ``finished``, once its last messages are acknowledged;
 - ``radio/in/{search_density,estimate,mode}`` (sub, RADIO, raw bytes parsed by
   sat_agent.ros.radio_parsing, once per process in composed mode);
 - ``cmd`` (pub, ControlCommand, STEP) and ``robot/goal`` (pub, PoseStamped, STEP): the
@@ -22,6 +22,15 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
   seconds of sim time (the plan when it changed).
 
 Every header carries the step's sim time and a frame (sat_agent.stamps).
+
+Parameters: SatParams and node_params.AgentNodeParams (sat_agent.ros.ros_params declares them);
+those in LIVE may be changed with ``ros2 param set`` while the agent runs, the rest are
+read-only.
+
+Until its first scan the agent announces on ``/world/ready`` how many readers its writers have
+matched (sat_agent.ros.readiness): world_sim starts once none of the run's first messages can
+be lost. With robot input it announces the robot inputs instead of the world's, so a robot (or a
+test) can tell when the agent's ``robot/goal`` writer matched its reader.
 
 Lock-step: a scan says how many radio messages were forwarded to this agent for its step
 (``radio_deliveries``); the agent steps when it has them all, or after ``report_wait_timeout``
@@ -49,16 +58,20 @@ from sensor_msgs.msg import PointCloud2
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
+from sat_agent.config import SatParams
+from sat_agent.node_params import AgentNodeParams
 from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage,
                                            measurements_from_msg, message_class, point,
                                            RADIO_TYPES, report_from_parts, report_to_msgs)
-from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.node_runner import (all_acked, FINAL_ACK_TIMEOUT_S, finish_run, run_nodes,
+                                       steady_timer)
 from sat_agent.ros.qos import RADIO, ROBOT, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
+from sat_agent.ros.readiness import ReadyAnnouncer
 from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotPose
-from sat_agent.ros.ros_params import AGENT_PARAMS, declare_node_params, declare_sat_params
+from sat_agent.ros.ros_params import NodeParameters
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_at, views_due
 from sat_agent.topic_names import (AGENT_VIEWS, ROBOT_DETECTIONS, ROBOT_GOAL, ROBOT_POSE,
@@ -72,6 +85,8 @@ MAX_STEP_JUMP = 1000
 # Reports older than this many steps are stale; younger late ones (radio latency) still add
 # their search density (Agent.step).
 MAX_REPORT_LAG = 4
+# Applied while the agent runs (``ros2 param set``); the others are read-only here.
+LIVE = ('search.investigate_steps', 'view_rate', 'report_wait_timeout', 'world_timeout')
 # Composed mode: parsed radio messages kept per agent of the process, two steps' worth of its
 # three messages (radio_parsing.py).
 PARSED_PER_AGENT = 2 * len(REPORT_KINDS)
@@ -86,15 +101,17 @@ class AgentNode(Node):
     def __init__(self, radio_parser: Optional[RadioParser] = None, **kwargs):
         super().__init__('agent', **kwargs)
         self.radio_parser = radio_parser or RadioParser()
-        self.params = declare_sat_params(self)
-        self.node_params = declare_node_params(self, AGENT_PARAMS)
+        self.parameters = NodeParameters(self, (SatParams, AgentNodeParams), LIVE, self._retune)
+        self.params, self.node_params = self.parameters.values
         self.agent_id = self.node_params.agent_id
         self.dt = self.params.motion.dt
         self._last_scan_at = None
+        self._finished_at = None      # when /world/step said the run is finished
         self.core = None
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         self.last_step = 0
-        self.guard = InputGuard(self, f'agent_{self.agent_id}')
+        self.guard = InputGuard(self, f'agent_{self.agent_id}',
+                                self.node_params.diagnostics_period)
         self._pending = None          # (step, (pose, measurements), deliveries, arrival time)
         self._radio = {}              # (sender, step) -> {kind: validated content}
         self._received_since_step = 0
@@ -110,20 +127,35 @@ class AgentNode(Node):
         self.view_pubs = {name: self.create_publisher(message_class(msgtype),
                                                       VIEW_PREFIX + name, WORLD)
                           for name, msgtype in AGENT_VIEWS.items()}
+        radio_in = [self.create_subscription(cls, f'radio/in/{kind}',
+                                             lambda data, kind=kind: self.on_radio(kind, data),
+                                             RADIO, raw=True)
+                    for kind, cls in RADIO_TYPES.items()]
+        # What an observer (the recorder) or a robot must not miss a message of.
+        self.answer_pubs = [self.cmd_pub, self.goal_pub, self.status_pub,
+                            *self.radio_pubs.values()]
         if self.node_params.input_source == 'robot':
-            self.create_subscription(PoseStamped, ROBOT_POSE[0], self.on_robot_pose, ROBOT)
-            self.create_subscription(PointCloud2, ROBOT_DETECTIONS[0], self.on_detections,
-                                     ROBOT)
+            # A robot reads its goal from the agent's writer: the announcement says when that
+            # writer matched it (the radio, from a bridge, may come later or never).
+            inputs = [self.create_subscription(PoseStamped, ROBOT_POSE[0], self.on_robot_pose,
+                                               ROBOT),
+                      self.create_subscription(PointCloud2, ROBOT_DETECTIONS[0],
+                                               self.on_detections, ROBOT)]
         else:
-            self.create_subscription(MeasurementSet, 'measurements', self.on_measurements,
-                                     STEP)
-            self.create_subscription(WorldStep, '/world/step', self.on_world_step, WORLD)
-        for kind, cls in RADIO_TYPES.items():
-            self.create_subscription(cls, f'radio/in/{kind}',
-                                     lambda data, kind=kind: self.on_radio(kind, data), RADIO,
-                                     raw=True)
+            inputs = [self.create_subscription(MeasurementSet, 'measurements',
+                                               self.on_measurements, STEP),
+                      self.create_subscription(WorldStep, '/world/step', self.on_world_step,
+                                               WORLD), *radio_in]
+        # world_sim starts step 1 once these writers have matched every reader of the run.
+        self.ready = ReadyAnnouncer(self, inputs, self.answer_pubs)
         steady_timer(self, 0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
+
+    def _retune(self, params: SatParams, node_params: AgentNodeParams):
+        """Take a live change (LIVE): the node reads its own at each use, the core at each step."""
+        self.params, self.node_params = params, node_params
+        if self.core is not None:
+            self.core.retune(params)
 
     # -- input ------------------------------------------------------------------------------
 
@@ -163,9 +195,10 @@ class AgentNode(Node):
         self._take_scan(ROBOT_DETECTIONS[0], step, (self._robot_pose.xy, z), 0)
 
     def on_world_step(self, msg: WorldStep):
-        if msg.finished:
+        if msg.finished and self._finished_at is None:
+            # The exit waits for the observers' acks of the last answers (_check_wait_timeout).
             self.get_logger().info(f'the run finished after step {msg.step}: exiting')
-            finish_run(self, 0)
+            self._finished_at = time.monotonic()
 
     def _new_step(self, step: int) -> bool:
         """Whether a scan of this step is news: not stale, not absurdly far ahead."""
@@ -179,6 +212,7 @@ class AgentNode(Node):
 
     def _take_scan(self, kind: str, step: int, scan, deliveries: int):
         self.guard.accept(kind)
+        self.ready.stop()
         self._last_scan_at = time.monotonic()
         if self._pending is not None:
             # The world moved on without our command (we were too slow): step the newest scan.
@@ -209,6 +243,11 @@ class AgentNode(Node):
         self._try_step()
 
     def _check_wait_timeout(self):
+        if self._finished_at is not None:
+            if all_acked(self.answer_pubs) \
+                    or time.monotonic() - self._finished_at > FINAL_ACK_TIMEOUT_S:
+                finish_run(self, 0)
+            return
         world_timeout = self.node_params.world_timeout
         if self._last_scan_at is not None and self.node_params.input_source == 'world_sim' \
                 and time.monotonic() - self._last_scan_at > world_timeout:

@@ -2,7 +2,7 @@
 
 A counter per reason, rate-limited warnings, and the counters published on ``/diagnostics``
 (diagnostic_msgs/DiagnosticArray) every ``diagnostics_period`` seconds (a node parameter,
-default 1).
+sat_agent.node_params.SteppingParams).
 """
 
 from collections import Counter
@@ -14,16 +14,12 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from sat_agent.ros.node_runner import steady_timer
 
 LOG_THROTTLE_S = 5.0
-DIAGNOSTICS_PERIOD_S = 1.0
 
 
 class InputGuard:
     """Counts what a node accepted and what it dropped, and why; reports it on /diagnostics."""
 
-    def __init__(self, node, hardware_id: str):
-        period = float(node.declare_parameter('diagnostics_period', DIAGNOSTICS_PERIOD_S).value)
-        if not period > 0:
-            raise ValueError(f"parameter 'diagnostics_period' = {period}: must be > 0 (s)")
+    def __init__(self, node, hardware_id: str, period: float):
         self._node = node
         self._hardware_id = hardware_id
         self.accepted = Counter()    # topic kind -> messages taken

@@ -13,6 +13,7 @@ import sys
 
 import rclpy
 from rclpy.clock import Clock, ClockType
+from rclpy.duration import Duration
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.signals import SignalHandlerOptions
 
@@ -25,6 +26,8 @@ except ImportError:
 SPIN_TIMEOUT_S = 0.1
 # Signals that end a process cleanly (Ctrl-C, the bring-up's stop, `kill`).
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+# At the end of a run, a node exits once its readers acknowledged its last messages, or after this.
+FINAL_ACK_TIMEOUT_S = 10.0
 
 
 def steady_timer(node, period: float, callback):
@@ -39,6 +42,15 @@ def steady_timer(node, period: float, callback):
     """
     # Positional: callback group, then clock (rclpy's Node.create_timer signature).
     return node.create_timer(period, callback, None, Clock(clock_type=ClockType.STEADY_TIME))
+
+
+def all_acked(publishers) -> bool:
+    """Whether every reader acknowledged everything these reliable writers sent (no waiting).
+
+    A reliable writer destroyed with unacknowledged samples loses them: a node polls this
+    before finish_run at the end of a run, so an observer does not miss the last step.
+    """
+    return all(p.wait_for_all_acked(Duration(seconds=0)) for p in publishers)
 
 
 def finish_run(node, code: int = 0):

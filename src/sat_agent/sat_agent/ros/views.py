@@ -1,8 +1,8 @@
 """The standard views: what RViz2 and Foxglove draw of an agent and of the world's truth.
 
 Next to the Rerun view (sat_world_sim.rerun_view), each agent publishes under its namespace, at
-``view_rate`` per second of sim time (ros_params.VIEW_RATE), everything in the ``map`` frame and
-stamped with its step's sim time (sat_agent.stamps):
+``view_rate`` per second of sim time (node_params.SteppingParams), everything in the ``map``
+frame and stamped with its step's sim time (sat_agent.stamps):
 
 - ``view/search_density`` nav_msgs/OccupancyGrid: its fused search density, 100 where never
   searched, 0 where just searched (view_geometry.occupancy);

@@ -1,9 +1,9 @@
 """The logger node: streams the live graph into a Rerun recording (rerun_view has the layout).
 
 Subscribes to ``/world/step``, ``/world/truth``, ``/world/radio`` and every agent's ``status``
-and ``radio/out/search_density`` (the metrics node's subscription set and QoS, sat_agent.ros.qos)
-and, like every observer, announces itself on ``/world/observers`` once they have all matched
-(observer.ReadyAnnouncer): world_sim counts it among its ``observers``. Messages are
+and ``radio/out/search_density`` (the metrics node's subscription set and QoS,
+sat_agent.ros.qos) and, like every observer, announces itself on ``/world/ready`` once they have
+all matched (sat_agent.ros.readiness): world_sim counts it among its ``observers``. Messages are
 grouped by step (rerun_view.StepBuffer, which an offline replay of a bag can use as well); a
 step is logged, in order, once its truth, radio and the statuses and densities of its active
 agents are in, or once a later step is complete (a lost status is then left out). After the
@@ -22,6 +22,7 @@ Every sink also writes run.rrd. Rerun analytics are off: this process and the vi
 use a private Rerun config under ``<run_dir>/.rerun`` (rerun_view.private_rerun_env).
 """
 
+from pathlib import Path
 import subprocess
 import sys
 import time
@@ -30,15 +31,16 @@ import urllib.parse
 from rclpy.node import Node
 import rerun as rr
 
+from sat_agent.config import SatParams
+from sat_agent.node_params import LoggerParams
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
-from sat_agent.ros.ros_params import declare_sat_params
+from sat_agent.ros.ros_params import NodeParameters
 
 from sat_world_sim import rerun_view
-from sat_world_sim.ros.observer import declare_run, watch_run
+from sat_world_sim.ros.observer import watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
-SINKS = ('file', 'viewer', 'web')
 
 
 class LoggerNode(Node):
@@ -46,17 +48,9 @@ class LoggerNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('logger', **kwargs)
-        self.params = declare_sat_params(self)
-        self.run_dir, self.agent_ids = declare_run(self, 'the directory to write run.rrd in')
-        sink = self.declare_parameter('sink', 'file').value
-        if sink not in SINKS:
-            raise ValueError(f"parameter 'sink' = {sink!r}: must be one of {', '.join(SINKS)}")
-        ports = {}
-        for name, default in (('viewer_port', 9876), ('web_port', 9090)):
-            value = self.declare_parameter(name, default).value
-            if not isinstance(value, int) or not 1 <= value <= 65535:
-                raise ValueError(f"parameter '{name}' = {value!r}: must be a port in 1..65535")
-            ports[name] = value
+        self.params, run = NodeParameters(self, (SatParams, LoggerParams)).values
+        self.run_dir, self.agent_ids, sink = Path(run.run_dir), run.agent_ids, run.sink
+        ports = {'viewer_port': run.viewer_port, 'web_port': run.web_port}
         self.run_dir.mkdir(parents=True, exist_ok=True)
         self.rrd_path = self.run_dir / 'run.rrd'
         env = rerun_view.disable_analytics(self.run_dir / '.rerun')

@@ -8,15 +8,19 @@ stays flat over long runs: the collector keeps the messages of the last records.
 steps, a compact record of each earlier step and each agent's last search density.
 """
 
+from pathlib import Path
 import time
 
 from rclpy.node import Node
 
+from sat_agent.config import SatParams
+from sat_agent.node_params import ObserverParams
+
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
-from sat_agent.ros.ros_params import declare_sat_params
+from sat_agent.ros.ros_params import NodeParameters
 
 from sat_world_sim.records import RunCollector
-from sat_world_sim.ros.observer import declare_run, watch_run
+from sat_world_sim.ros.observer import watch_run
 
 # After the world says "finished", wait at most this long for the last statuses.
 FINAL_WAIT_S = 5.0
@@ -27,11 +31,11 @@ class MetricsNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('metrics', **kwargs)
-        self.params = declare_sat_params(self)
-        self.run_dir, agent_ids = declare_run(self, 'where metrics.json and plots/ go')
-        self.collector = RunCollector(agent_ids)
+        self.params, run = NodeParameters(self, (SatParams, ObserverParams)).values
+        self.run_dir = Path(run.run_dir)
+        self.collector = RunCollector(run.agent_ids)
         self._finished_at = None
-        self.ready = watch_run(self, agent_ids, self.collector.add)
+        self.ready = watch_run(self, run.agent_ids, self.collector.add)
         steady_timer(self, 0.1, self._tick)
 
     def _tick(self):

@@ -1,51 +1,15 @@
-"""How an observer node (metrics, recorder, logger) tells world_sim it is ready to watch.
+"""What the observer nodes (metrics, recorder, logger) share: what they read.
 
-world_sim must not start step 1 before every observer receives every topic it needs, or the run's
-first messages are lost to it (DDS drops what a writer sends before a reader matched). So each
-observer checks that each of its subscriptions has matched a publisher, then announces its name
-once on the latched ``/world/observers`` topic; world_sim starts when it has heard ``observers``
-distinct names (and every agent is matched).
+Their parameters are sat_agent.node_params.ObserverParams (LoggerParams for the logger).
+Each observer announces itself once all its subscriptions have a publisher
+(sat_agent.ros.readiness.ReadyAnnouncer); world_sim waits for ``observers`` of them, and for
+the writers of what they read to have matched them, before step 1, so no observer misses the
+run's first messages.
 """
 
-from pathlib import Path
-
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from std_msgs.msg import String
-
-from sat_agent.ros.node_runner import steady_timer
 from sat_agent.ros.qos import RADIO, STEP, WORLD
+from sat_agent.ros.readiness import ReadyAnnouncer
 from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, WorldStep
-
-TOPIC = '/world/observers'
-QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
-                 durability=DurabilityPolicy.TRANSIENT_LOCAL)
-
-
-class ReadyAnnouncer:
-    """Announce node's name on TOPIC once all the given subscriptions have a publisher."""
-
-    def __init__(self, node, subscriptions, period: float = 0.1):
-        self._node = node
-        self._subscriptions = list(subscriptions)
-        self._publisher = node.create_publisher(String, TOPIC, QOS)
-        self._timer = steady_timer(node, period, self._check)
-
-    def _check(self):
-        if all(s.get_publisher_count() > 0 for s in self._subscriptions):
-            self._publisher.publish(String(data=self._node.get_fully_qualified_name()))
-            self._node.destroy_timer(self._timer)
-
-
-def declare_run(node, what: str):
-    """Declare the observer parameters ``run_dir`` (required) and ``agent_ids``.
-
-    Returns (run_dir as a Path, agent ids as ints); what says what goes into run_dir, for the
-    error message when it is missing.
-    """
-    run_dir = node.declare_parameter('run_dir', '').value
-    if not run_dir:
-        raise ValueError(f"parameter 'run_dir' is required: {what}")
-    return Path(run_dir), [int(i) for i in node.declare_parameter('agent_ids', [1, 2]).value]
 
 
 def watch_run(node, agent_ids, add) -> ReadyAnnouncer:

@@ -7,9 +7,15 @@ install (with sat_msgs built) plays it back. Timestamps are the receive times (n
 The MCAP chunks are zstd-compressed (rosbag2's MCAP storage reads them natively; metadata.yaml
 says no bag-level compression): ~25 times smaller, mostly the search densities (a 4-agent
 soak: ~0.4 GB per 1,000 steps uncompressed, 14 MB compressed).
-The node closes the bag and exits after the world's final step, or on Ctrl-C.
+The node closes the bag and exits after the world's final step once the run's last messages are
+in (or after FINAL_WAIT_S), or on Ctrl-C. DDS does not order messages across topics, so the
+final WorldStep can come before the last step's other messages: the run's last messages are in
+when each agent active at the final step has sent its scan's answers (cmd, robot/goal, status,
+radio/out) of that step (by their headers' sim time), and world_sim has exited, which it does
+only once every reader acknowledged its messages (so they are all in this node's queues).
 """
 
+from pathlib import Path
 import time
 
 from rclpy.node import Node
@@ -18,17 +24,23 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
                                 QosTime)
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
+from sat_agent.node_params import ObserverParams
 from sat_agent.ros.msg_conversions import message_class
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
-from sat_msgs.msg import WorldStep
+from sat_agent.ros.readiness import ReadyAnnouncer
+from sat_agent.ros.ros_params import NodeParameters
+from sat_agent.topic_names import ROBOT_GOAL
+from sat_msgs.msg import GroundTruth, WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
-from sat_world_sim.ros.observer import declare_run, ReadyAnnouncer
 from sat_world_sim.ros.replay_support import topic_qos
-from sat_world_sim.topics import graph_topics
+from sat_world_sim.topics import graph_topics, Topic
 
-# After the world's final step, keep recording this long for the last messages in flight.
-FINAL_WAIT_S = 2.0
+# After the world's final step, wait at most this long for the run's last messages.
+FINAL_WAIT_S = 10.0
+# An active agent's answers to a scan: the messages of the final step the bag must hold.
+ANSWERS = ('cmd', ROBOT_GOAL[0], 'status', 'radio/out/search_density', 'radio/out/estimate',
+           'radio/out/mode')
 
 
 def bag_qos(profile) -> Qos:
@@ -46,7 +58,8 @@ class RecorderNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('recorder', **kwargs)
-        run_dir, agent_ids = declare_run(self, 'the bag goes to <run_dir>/bag')
+        (run,) = NodeParameters(self, (ObserverParams,)).values
+        run_dir, agent_ids = Path(run.run_dir), run.agent_ids
         self.path = run_dir / 'bag'
         if self.path.exists():
             raise ValueError(f"parameter 'run_dir' = '{run_dir}': {self.path} exists already")
@@ -59,6 +72,8 @@ class RecorderNode(Node):
         self.writer.open()
         self.count = 0
         self._finished_at = None
+        self._agent_ids = agent_ids
+        self._last = {}          # topic -> (Topic, CDR bytes of its last message)
         subscriptions = []
         for topic in graph_topics(agent_ids):
             qos = topic_qos(topic)
@@ -66,21 +81,52 @@ class RecorderNode(Node):
                                                     offered_qos_profiles=[bag_qos(qos)])
             subscriptions.append(self.create_subscription(
                 message_class(topic.msgtype), topic.name,
-                lambda data, c=connection, name=topic.name: self._write(c, name, data),
-                qos, raw=True))
+                lambda data, c=connection, t=topic: self._write(c, t, data), qos, raw=True))
         self.ready = ReadyAnnouncer(self, subscriptions)
         steady_timer(self, 0.2, self._tick)
 
-    def _write(self, connection, name: str, data: bytes):
+    def _write(self, connection, topic: Topic, data: bytes):
         self.writer.write(connection, time.time_ns(), data)
         self.count += 1
-        if name == '/world/step' and deserialize_message(data, WorldStep).finished:
+        self._last[topic.name] = (topic, data)
+        if topic.name == '/world/step' and deserialize_message(data, WorldStep).finished:
             self._finished_at = time.monotonic()
 
+    def _last_stamp(self, name: str) -> int:
+        """Return the header stamp (ns of sim time) of the last message on a topic, -1 before any.
+
+        Every message of step k carries t_k (sat_agent.stamps), the standard-typed ones too.
+        """
+        if name not in self._last:
+            return -1
+        topic, data = self._last[name]
+        stamp = deserialize_message(data, message_class(topic.msgtype)).header.stamp
+        return stamp.sec * 10**9 + stamp.nanosec
+
+    def _all_in(self) -> bool:
+        """Whether the run's last messages are in (module docstring)."""
+        if self.count_publishers('/world/step') > 0:
+            return False
+        final = self._last_stamp('/world/step')
+        if self._last_stamp('/world/truth') != final:
+            return False
+        truth = deserialize_message(self._last['/world/truth'][1], GroundTruth)
+        active = [a.id for a in truth.agents if a.active and a.id in self._agent_ids]
+        return all(self._last_stamp(f'/agent_{i}/{name}') >= final
+                   for i in active for name in ANSWERS)
+
     def _tick(self):
-        if self._finished_at is not None and time.monotonic() - self._finished_at > FINAL_WAIT_S:
+        if self._finished_at is None:
+            return
+        waited = time.monotonic() - self._finished_at
+        if self._all_in():
             self.get_logger().info(f'wrote {self.count} messages to {self.path}')
-            finish_run(self, 0)
+        elif waited > FINAL_WAIT_S:
+            self.get_logger().warning(f'wrote {self.count} messages to {self.path}; the last '
+                                      f'step was still incomplete after {FINAL_WAIT_S} s')
+        else:
+            return
+        finish_run(self, 0)
 
     def destroy_node(self):
         """Close the bag (metadata.yaml is written on close) whatever ended the node."""

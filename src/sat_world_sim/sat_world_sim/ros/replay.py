@@ -82,8 +82,11 @@ def replay_live(bag: Path, rate: float, loop: bool, topics: Optional[Sequence[st
                 if not loop:
                     break
             # A reliable writer drops what readers have not acknowledged when it is destroyed.
-            for publisher in publishers.values():
-                publisher.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT_S))
+            unacked = [p.topic_name for p in publishers.values()
+                       if not p.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT_S))]
+            if unacked:
+                print(f'replay: messages on {unacked} not acknowledged by every reader after '
+                      f'{ACK_TIMEOUT_S} s', file=sys.stderr)
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

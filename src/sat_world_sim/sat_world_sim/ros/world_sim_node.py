@@ -14,6 +14,10 @@ loss, delay, counters); this node moves messages:
   are: a report reaches ~30 agents with 64 spread over the area, and publishing a message
   object (serialised again for each receiver) took about half of this node's CPU with 48.
 
+Parameters: SatParams and sat_agent.node_params.WorldNodeParams; those in LIVE (the radio
+range C_R and loss, ``agent_timeout``, ``view_rate``) may be changed with ``ros2 param set``
+while it runs, the rest are read-only.
+
 Clocks (parameter ``clock``):
 
 - ``lock_step``: step k+1 starts as soon as every active agent has sent its command and its
@@ -28,12 +32,16 @@ position and is not waited for until it speaks again. Commands that are not one 
 of Eqn. controlVectors or leave the area are refused with a log line; the agent holds. Every
 command and report is validated (the sender's namespace, the step, the content: the radio never
 forwards garbage); what is dropped is counted per reason on ``/diagnostics``.
-When the run is over the node publishes a final WorldStep with ``finished`` (the agents exit on
-it) and exits. Its timers run on the steady clock (node_runner.steady_timer): it is the source
-of ``/clock``, so under ``use_sim_time`` its own ROS clock only moves when it steps.
+Step 1 starts once the start-up handshake of sat_agent.ros.readiness says no first message can
+be lost (or after ``startup_timeout`` seconds, with a warning naming what is missing). When the
+run is over the node publishes a final WorldStep with ``finished`` (the agents exit on it) and
+exits once its readers acknowledged the last messages. Its timers run on the steady clock
+(node_runner.steady_timer): it is the source of ``/clock``, so under ``use_sim_time`` its own
+ROS clock only moves when it steps.
 """
 
 from collections import Counter
+import json
 from pathlib import Path
 import time
 
@@ -46,15 +54,18 @@ from std_msgs.msg import String
 from visualization_msgs.msg import MarkerArray
 
 from sat_agent.agent_core import wire_bytes
+from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION
-from sat_agent.ros import views
+from sat_agent.node_params import WorldNodeParams
+from sat_agent.ros import readiness, views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.msg_conversions import (header, InvalidMessage, measurements_to_msg, point,
                                            RADIO_TYPES)
-from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
+from sat_agent.ros.node_runner import (all_acked, FINAL_ACK_TIMEOUT_S, finish_run, run_nodes,
+                                       steady_timer)
 from sat_agent.ros.qos import RADIO, STEP, WORLD
 from sat_agent.ros.radio_parsing import RadioParser
-from sat_agent.ros.ros_params import declare_node_params, declare_sat_params, WORLD_PARAMS
+from sat_agent.ros.ros_params import NodeParameters
 from sat_agent.search_density import Lattice
 from sat_agent.stamps import step_time, views_due
 from sat_agent.topic_names import CLOCK, TRUTH_MARKERS
@@ -62,12 +73,12 @@ from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSe
                           TargetTruth, WorldStep)
 
 from sat_world_sim.radio import Radio
-from sat_world_sim.ros import observer
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
-DISCOVERY_SETTLE_S = 0.5
+# Applied while world_sim runs (``ros2 param set``); the others are read-only here.
+LIVE = ('cooperation.comm_range', 'radio.loss', 'agent_timeout', 'view_rate')
 
 
 def default_scenario() -> str:
@@ -81,8 +92,10 @@ class WorldSimNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('world_sim', **kwargs)
-        self.params = declare_sat_params(self)
-        node = declare_node_params(self, WORLD_PARAMS)
+        self.parameters = NodeParameters(self, (SatParams, WorldNodeParams), LIVE,
+                                         self._retune)
+        self.params, self.settings = self.parameters.values
+        node = self.settings
         scenario = load_scenario(node.scenario or default_scenario(), self.params.area.width,
                                  self.params.area.height)
         if node.seed >= 0:
@@ -90,18 +103,16 @@ class WorldSimNode(Node):
         self.total_steps = node.steps if node.steps > 0 else scenario.steps
         self.clock = clock = node.clock
         self.period = node.period
-        self.agent_timeout = node.agent_timeout
         self.startup_timeout = node.startup_timeout
         self.observers = node.observers
-        self.view_rate = node.view_rate
         self.dt = self.params.motion.dt
-        self.radio = Radio(self.params.cooperation.comm_range, node.radio_loss,
-                           node.radio_delay_steps, seed=scenario.seed)
+        self.radio = Radio(self.params.cooperation.comm_range, node.radio.loss,
+                           node.radio.delay_steps, seed=scenario.seed)
 
         self.world = World(scenario, self.params)
         self.ids = self.world.agent_ids
         self.active = set(self.ids)
-        self.guard = InputGuard(self, 'world_sim')
+        self.guard = InputGuard(self, 'world_sim', node.diagnostics_period)
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
         # Each report arrives once, so nothing to cache (radio_parsing.py).
         self.radio_parser = RadioParser()
@@ -110,8 +121,7 @@ class WorldSimNode(Node):
         self._reports = {i: set() for i in self.ids}
         self._deadline = None
         self._started = False
-        self._ready_since = None
-        self._observers_ready = set()
+        self._announcements = {}      # node name -> its last start-up announcement
         self._finished_at = None
         self._last_view_step = None
 
@@ -134,41 +144,56 @@ class WorldSimNode(Node):
                 self.create_subscription(
                     cls, f'{ns}/radio/out/{kind}',
                     lambda data, i=i, kind=kind: self.on_report(i, kind, data), RADIO, raw=True)
-        self.create_subscription(String, observer.TOPIC,
-                                 lambda m: self._observers_ready.add(m.data), observer.QOS)
+        self.create_subscription(String, readiness.TOPIC, self.on_announcement, readiness.QOS)
         self._launched = time.monotonic()
         steady_timer(self, 0.02, self._tick)
         self.get_logger().info(
             f'{scenario.name}: {len(self.ids)} agents, {self.total_steps} steps, {clock} clock')
 
+    def _retune(self, params: SatParams, settings: WorldNodeParams):
+        """Take a live change (LIVE): the radio and the world gate the next message with it."""
+        self.params, self.settings = params, settings
+        self.world.params = params
+        self.radio.comm_range = params.cooperation.comm_range
+        self.radio.loss = settings.radio.loss
+
     # -- start-up ---------------------------------------------------------------------------
 
-    def _graph_ready(self) -> bool:
-        """Every agent's topics are matched both ways, and the expected observers are there.
+    def on_announcement(self, msg: String):
+        """Keep each node's last start-up announcement (sat_agent.ros.readiness)."""
+        try:
+            announced = json.loads(msg.data)
+            name, reads, writes = announced['node'], announced['reads'], announced['writes']
+            if not isinstance(reads, list) or not isinstance(writes, dict):
+                raise TypeError('reads must be a list and writes a mapping')
+        except (ValueError, KeyError, TypeError) as error:
+            self.guard.drop('bad_announcement', f'{readiness.TOPIC}: {error}')
+            return
+        self._announcements[str(name)] = announced
 
-        ``observers`` is how many nodes besides the agents must see the run from its first step
-        (the metrics node, a logger, a recorder): each announces itself on /world/observers once
-        all its subscriptions are matched (sat_world_sim.ros.observer).
+    def _unmet(self):
+        """Return what keeps step 1 from starting (sat_agent.ros.readiness).
+
+        Every agent and ``observers`` other nodes (metrics, a logger, a recorder, a test's
+        watcher) must have announced, and every writer must have matched their readers.
         """
-        for i in self.ids:
-            ns = f'/agent_{i}'
-            if self.scan_pubs[i].get_subscription_count() == 0:
-                return False
-            if self.count_publishers(f'{ns}/cmd') == 0:
-                return False
-            if any(self.inbox_pubs[(i, kind)].get_subscription_count() == 0
-                   or self.count_publishers(f'{ns}/radio/out/{kind}') == 0
-                   for kind in RADIO_TYPES):
-                return False
-        return len(self._observers_ready) >= self.observers
+        return readiness.unmet(
+            self._announcements, (s.topic_name for s in self.subscriptions),
+            {p.topic_name: p.get_subscription_count() for p in self._run_publishers()},
+            self.ids, self.observers)
+
+    def _run_publishers(self):
+        return [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub,
+                *self.scan_pubs.values(), *self.inbox_pubs.values()]
 
     # -- the loop ---------------------------------------------------------------------------
 
     def _tick(self):
         now = time.monotonic()
         if self._finished_at is not None:
-            # Give the last messages time to leave before the process exits.
-            if now - self._finished_at > 1.0:
+            # A reliable writer destroyed with unacknowledged samples loses them: the observers
+            # would miss the final step.
+            if self._final_messages_acked() or now - self._finished_at > FINAL_ACK_TIMEOUT_S:
                 finish_run(self, 0)
             return
         if not self._started:
@@ -187,25 +212,28 @@ class WorldSimNode(Node):
         elif now >= self._deadline:
             silent = sorted(i for i in self.active if not self._answered(i))
             self.get_logger().warning(
-                f'step {self.world.step}: agents {silent} silent for {self.agent_timeout} s: '
+                f'step {self.world.step}: agents {silent} silent for '
+                f'{self.settings.agent_timeout} s: '
                 'marked inactive, they hold position')
             self.active -= set(silent)
             self._finish_step()
 
     def _start_when_ready(self, now: float):
-        if not self._graph_ready():
-            self._ready_since = None
-            if now - self._launched > self.startup_timeout:
-                self.get_logger().warning('start-up timeout: starting with the agents found')
-                self._started = True
-                self._begin_step()
+        unmet = self._unmet()
+        if unmet and now - self._launched <= self.startup_timeout:
             return
-        # Discovery is not symmetric at one instant: let the other nodes match too.
-        if self._ready_since is None:
-            self._ready_since = now
-        elif now - self._ready_since >= DISCOVERY_SETTLE_S:
-            self._started = True
-            self._begin_step()
+        if unmet:
+            self.get_logger().warning(f'start-up timeout ({self.startup_timeout} s): starting '
+                                      f"without: {'; '.join(unmet)}")
+        self._started = True
+        self._begin_step()
+
+    def _final_messages_acked(self) -> bool:
+        """Whether /clock, the world's topics, the active agents' scans and inboxes are acked."""
+        publishers = [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub]
+        publishers += [self.scan_pubs[i] for i in self.active]
+        publishers += [p for (i, _), p in self.inbox_pubs.items() if i in self.active]
+        return all_acked(publishers)
 
     def _answered(self, agent_id: int) -> bool:
         return agent_id in self._cmds and len(self._reports[agent_id]) == len(RADIO_TYPES)
@@ -219,7 +247,7 @@ class WorldSimNode(Node):
         truth = self.world.truth()
         self.step_pub.publish(self._step_msg(k, finished=False))
         self.truth_pub.publish(self._truth_msg(k, poses, truth))
-        if views_due(k, self._last_view_step, self.dt, self.view_rate):
+        if views_due(k, self._last_view_step, self.dt, self.settings.view_rate):
             self._last_view_step = k
             self.markers_pub.publish(views.truth_markers(
                 truth.ids, truth.states[:, POSITION], poses,
@@ -234,7 +262,7 @@ class WorldSimNode(Node):
         self._reports = {i: set() for i in self.ids}
         now = time.monotonic()
         if lock_step:
-            self._deadline = now + self.agent_timeout
+            self._deadline = now + self.settings.agent_timeout
         else:
             # A fixed schedule, step k ending at start + k T: timing from now would stretch
             # every period by the time publishing took. A world that fell a whole period

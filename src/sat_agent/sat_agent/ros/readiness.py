@@ -1,0 +1,112 @@
+"""The start-up handshake of a run: world_sim starts step 1 once no first message can be lost.
+
+DDS hands a reliable, volatile sample to a reader only if the *writer* had matched that reader
+when the sample was written: Fast DDS marks what a writer holds as irrelevant for a reader it
+matches later. The reader's side does not matter, a reader that matches a little later gets the
+sample repaired. Discovery is not symmetric either: one process can see a match long before the
+other does (a lost discovery message is repaired only after the builtin heartbeat period, ~3 s),
+so no process can tell from its own view that the others' writers see it.
+
+So every node of a run (agents, observers such as metrics, recorder and logger, and a test's
+scripted nodes) announces on the latched TOPIC, as JSON, what it reads and, for each topic it
+writes, how many readers its writer has matched::
+
+    {"node": "/agent_1/agent", "reads": ["/agent_1/measurements", ...],
+     "writes": {"/agent_1/cmd": 2, "/agent_1/status": 3, ...}}
+
+once every subscription it reads the run through has a publisher, and again whenever a writer's
+count changes. world_sim starts when every agent and ``observers`` other nodes have announced
+and every writer (theirs and its own) has matched at least as many readers as the announced
+nodes (and world_sim itself) that read its topic: ``unmet`` says what is still missing.
+A reader that is not announced (``ros2 topic echo``) is not waited for; one that is counted in
+its place would let a writer pass with one announced reader unmatched.
+"""
+
+import json
+from typing import Iterable, List, Mapping
+
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String
+
+from sat_agent.ros.node_runner import steady_timer
+
+TOPIC = '/world/ready'
+# Latched: world_sim started after a node still reads that node's last announcements. Each
+# node's writer keeps its own history, so the depth counts one node's announcements.
+QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                 durability=DurabilityPolicy.TRANSIENT_LOCAL)
+CHECK_PERIOD_S = 0.1
+
+
+def announcement(node_name: str, reads: Iterable[str], writes: Mapping[str, int]) -> str:
+    """Return the JSON text a node announces (module docstring)."""
+    return json.dumps({'node': node_name, 'reads': sorted(set(reads)),
+                       'writes': dict(sorted(writes.items()))})
+
+
+def is_agent(announced: Mapping, agent_id: int) -> bool:
+    """Whether an announcement speaks for agent agent_id (it writes its commands)."""
+    return f'/agent_{agent_id}/cmd' in announced['writes']
+
+
+def unmet(announcements: Mapping[str, Mapping], own_reads: Iterable[str],
+          own_writes: Mapping[str, int], agent_ids: Iterable[int], observers: int) -> List[str]:
+    """Return what keeps world_sim from starting; empty when the run can start.
+
+    announcements: the last announcement of each node, by node name (parsed JSON);
+    own_reads, own_writes: world_sim's own subscriptions' topics and writers' matched counts.
+    """
+    missing = []
+    agent_ids = list(agent_ids)
+    for i in agent_ids:
+        if not any(is_agent(a, i) for a in announcements.values()):
+            missing.append(f'agent {i} has not announced itself')
+    others = [name for name, a in announcements.items()
+              if not any(is_agent(a, i) for i in agent_ids)]
+    if len(others) < observers:
+        missing.append(f'{len(others)} of {observers} observers announced ({sorted(others)})')
+    readers = dict.fromkeys(own_reads, 1)
+    for a in announcements.values():
+        for topic in a['reads']:
+            readers[topic] = readers.get(topic, 0) + 1
+    writers = [('world_sim', own_writes)] + [(name, a['writes'])
+                                             for name, a in announcements.items()]
+    for name, writes in writers:
+        for topic, matched in sorted(writes.items()):
+            if matched < readers.get(topic, 0):
+                missing.append(f'{name} writes {topic} to {matched} of {readers[topic]} readers')
+    return missing
+
+
+class ReadyAnnouncer:
+    """Announce a node on TOPIC (module docstring) until stop() or, without writers, once.
+
+    subscriptions: those the node reads the run through (each must have a publisher first);
+    publishers: the node's writers whose matched readers world_sim checks.
+    """
+
+    def __init__(self, node, subscriptions, publishers=(), period: float = CHECK_PERIOD_S):
+        self._node = node
+        self._subscriptions = list(subscriptions)
+        self._publishers = list(publishers)
+        self._announced = None
+        self._publisher = node.create_publisher(String, TOPIC, QOS)
+        self._timer = steady_timer(node, period, self._check)
+
+    def _check(self):
+        if not all(s.get_publisher_count() > 0 for s in self._subscriptions):
+            return
+        text = announcement(self._node.get_fully_qualified_name(),
+                            (s.topic_name for s in self._subscriptions),
+                            {p.topic_name: p.get_subscription_count() for p in self._publishers})
+        if text != self._announced:
+            self._publisher.publish(String(data=text))
+            self._announced = text
+        if not self._publishers:
+            self.stop()
+
+    def stop(self):
+        """No more announcements (the run started: nobody waits for them any more)."""
+        if self._timer is not None:
+            self._node.destroy_timer(self._timer)
+            self._timer = None

@@ -1,0 +1,156 @@
+"""Live parameters through rclpy's parameter service client, against running nodes.
+
+``ros2 param set`` of a read-only parameter is refused by rclpy; of a live one with a bad value,
+refused with the schema's reason (the parameter, the value, what is allowed); of a live one with
+a good value, applied: ``get`` shows it and the node behaves by it (world_sim's radio links,
+an agent's views).
+``ros2 param describe`` shows each parameter's description, range and read-only flag.
+"""
+
+from geometry_msgs.msg import PoseStamped
+import pytest
+from rclpy.parameter import Parameter, parameter_value_to_python
+from rclpy.parameter_client import AsyncParameterClient
+from ros_harness import (executable, PARAMS, ros_node, scaled, spin_until, started,
+                         write_scenario)
+
+from sat_agent.config import SatParams
+from sat_agent.node_params import AgentNodeParams
+from sat_agent.parameter_schema import leaves
+from sat_agent.ros.qos import WORLD
+from sat_agent.topic_names import VIEW_PREFIX
+from sat_msgs.msg import RadioTraffic
+
+# Bounds (scaled by SAT_TEST_TIMEOUT_SCALE): a node's start-up, a parameter service's answer.
+START_S = 60.0
+ANSWER_S = 30.0
+# Steps after a change that may still show the old value (messages in flight) or be watched.
+SETTLE_STEPS = 2
+WATCH_STEPS = 4
+
+
+def call(node, future, what: str):
+    """Spin node until future is done; return its result."""
+    spin_until(node, future.done, ANSWER_S, what)
+    return future.result()
+
+
+def services(node, name: str) -> AsyncParameterClient:
+    """Return a parameter client of node name once its services are up."""
+    client = AsyncParameterClient(node, name)
+    assert client.wait_for_services(timeout_sec=scaled(START_S)), f'{name} parameter services'
+    return client
+
+
+def set_one(node, client, name, value):
+    """Set one parameter; return its SetParametersResult."""
+    future = client.set_parameters([Parameter(name, value=value)])
+    return call(node, future, f'set {name}').results[0]
+
+
+def assert_refused(node, client, name, value, reason: str):
+    """Set one parameter and check it is refused with reason in the answer."""
+    result = set_one(node, client, name, value)
+    assert not result.successful and reason in result.reason, result.reason
+
+
+def get_one(node, client, name):
+    """Get one parameter's value (rclpy's Parameter value)."""
+    answer = call(node, client.get_parameters([name]), f'get {name}')
+    return parameter_value_to_python(answer.values[0])
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(180)
+def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_path):
+    command = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
+               '--params-file', str(PARAMS), '-p', 'agent_id:=1']
+    with ros_node('param_test_client') as node, started(command, tmp_path / 'agent.log') as agent:
+        client = services(node, '/agent_1/agent')
+        described = call(node, client.describe_parameters(
+            ['sensor.p_detect', 'search.investigate_steps', 'search.policy']),
+            'describe').descriptors
+        p_detect, budget, policy = described
+        assert 'p_D' in p_detect.description and p_detect.read_only
+        assert (p_detect.floating_point_range[0].from_value,
+                p_detect.floating_point_range[0].to_value) == (0.0, 1.0)
+        assert '(0, 1]' in p_detect.additional_constraints
+        assert not budget.read_only and budget.integer_range[0].from_value == 1
+        assert "'thompson'" in policy.additional_constraints and policy.read_only
+        names = {name for schema in (SatParams, AgentNodeParams)
+                 for name, _, _ in leaves(schema)}
+        listed = call(node, client.list_parameters(), 'list').result.names
+        assert names <= set(listed)
+
+        assert_refused(node, client, 'sensor.p_detect', 5.0, 'read-only')
+        assert get_one(node, client, 'sensor.p_detect') == 0.99
+
+        # Outside the descriptor's range: rclpy refuses first, naming the range.
+        assert_refused(node, client, 'search.investigate_steps', 0,
+                       'search.investigate_steps out of range. Min: 1, Max: 10000, value: 0')
+        # At an open end, or of the wrong type: the schema refuses (the on-set callback).
+        assert_refused(node, client, 'report_wait_timeout', 0.0,
+                       "'report_wait_timeout' = 0.0: allowed range is (0, 86400]")
+        assert_refused(node, client, 'view_rate', 'hello',
+                       "'view_rate' = 'hello': must be a number")
+        assert get_one(node, client, 'search.investigate_steps') == 4
+
+        applied = set_one(node, client, 'search.investigate_steps', 7)
+        assert applied.successful, applied.reason
+        assert get_one(node, client, 'search.investigate_steps') == 7
+        applied = set_one(node, client, 'view_rate', 2)     # an int for a float is fine
+        assert applied.successful, applied.reason
+        assert agent.poll() is None, (tmp_path / 'agent.log').read_text()
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(300)
+def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
+    scenario = write_scenario(tmp_path / 'pair.yaml', name='pair', seed=3, steps=400,
+                              agents=[{'id': 1, 'start': [40.0, 50.0]},
+                                      {'id': 2, 'start': [50.0, 50.0]}])
+    common = ['--params-file', str(PARAMS), '-p', 'seed:=3']
+    world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *common,
+             '-p', f'scenario:={scenario}', '-p', 'clock:=real_time', '-p', 'period:=0.3']
+    agents = [[executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{i}',
+               *common, '-p', f'agent_id:={i}'] for i in (1, 2)]
+    traffic, views = {}, set()
+    with ros_node('param_test_client') as node, \
+            started(world, tmp_path / 'world.log') as world_sim, \
+            started(agents[0], tmp_path / 'agent_1.log') as agent_1, \
+            started(agents[1], tmp_path / 'agent_2.log') as agent_2:
+        running = (world_sim, agent_1, agent_2)
+        node.create_subscription(RadioTraffic, '/world/radio',
+                                 lambda m: traffic.__setitem__(m.step, len(m.link_a)), 50)
+        node.create_subscription(PoseStamped, f'/agent_1/{VIEW_PREFIX}pose',
+                                 lambda m: views.add(m.header.stamp.sec), WORLD)
+        client = services(node, '/world_sim')
+        # 10 m apart at the start, within C_R = 50 m: linked.
+        spin_until(node, lambda: any(traffic.values()), START_S, 'a step with a radio link',
+                   running)
+
+        assert_refused(node, client, 'cooperation.comm_range', -1.0,
+                       'cooperation.comm_range out of range Min: 0.0, Max: inf, value: -1.0')
+        assert_refused(node, client, 'radio.loss', 1.0,
+                       "'radio.loss' = 1.0: allowed range is [0, 1)")
+        assert any(traffic.values())
+        assert_refused(node, client, 'radio.delay_steps', 2, 'read-only')
+
+        applied = set_one(node, client, 'cooperation.comm_range', 0.0)
+        assert applied.successful, applied.reason
+        changed_at = max(traffic)
+        assert get_one(node, client, 'cooperation.comm_range') == 0.0
+        # After the steps in flight, no pair is within 0 m.
+        spin_until(node, lambda: max(traffic) > changed_at + WATCH_STEPS, START_S,
+                   f'{WATCH_STEPS} steps after the change', running)
+        assert all(traffic[k] == 0 for k in traffic if k > changed_at + SETTLE_STEPS)
+
+        # The agent's views (every step at view_rate 1 with dt = 1 s) stop at view_rate 0.
+        agent = services(node, '/agent_1/agent')
+        assert views
+        applied = set_one(node, agent, 'view_rate', 0.0)
+        assert applied.successful, applied.reason
+        stopped_at = max(traffic)
+        spin_until(node, lambda: max(traffic) > stopped_at + WATCH_STEPS, START_S,
+                   f'{WATCH_STEPS} steps after view_rate 0', running)
+        assert not [k for k in views if k > stopped_at + SETTLE_STEPS]

@@ -1,0 +1,56 @@
+"""The start-up handshake's rule (sat_agent.ros.readiness.unmet), without a graph."""
+
+import json
+
+from sat_agent.ros.readiness import announcement, unmet
+
+WORLD_READS = ['/agent_1/cmd', '/agent_1/radio/out/mode']
+WORLD_WRITES = {'/agent_1/measurements': 2, '/world/step': 1}
+
+
+def agent(cmd=2, status=1, mode=2):
+    return json.loads(announcement(
+        '/agent_1/agent', ['/agent_1/measurements'],
+        {'/agent_1/cmd': cmd, '/agent_1/status': status, '/agent_1/radio/out/mode': mode}))
+
+
+def recorder():
+    return json.loads(announcement(
+        '/recorder', ['/agent_1/cmd', '/agent_1/status', '/agent_1/measurements',
+                      '/agent_1/radio/out/mode', '/world/step'], {}))
+
+
+def test_a_run_whose_writers_matched_every_announced_reader_can_start():
+    announced = {'/agent_1/agent': agent(), '/recorder': recorder()}
+    assert unmet(announced, WORLD_READS, WORLD_WRITES, [1], observers=1) == []
+
+
+def test_a_writer_that_has_not_matched_an_observer_holds_the_start():
+    # The recorder sees the agent's status writer, but that writer does not see it yet.
+    announced = {'/agent_1/agent': agent(status=0), '/recorder': recorder()}
+    assert unmet(announced, WORLD_READS, WORLD_WRITES, [1], observers=1) == [
+        '/agent_1/agent writes /agent_1/status to 0 of 1 readers']
+
+
+def test_world_sim_counts_itself_and_the_observers_among_the_readers():
+    # cmd is read by world_sim and the recorder: one match is not enough.
+    announced = {'/agent_1/agent': agent(cmd=1), '/recorder': recorder()}
+    assert unmet(announced, WORLD_READS, WORLD_WRITES, [1], observers=1) == [
+        '/agent_1/agent writes /agent_1/cmd to 1 of 2 readers']
+    # And its own writers must have matched the agent and the recorder.
+    assert unmet({'/agent_1/agent': agent(), '/recorder': recorder()}, WORLD_READS,
+                 dict(WORLD_WRITES, **{'/agent_1/measurements': 1}), [1], observers=1) == [
+        'world_sim writes /agent_1/measurements to 1 of 2 readers']
+
+
+def test_missing_agents_and_observers_are_named():
+    problems = unmet({'/recorder': recorder()}, WORLD_READS, WORLD_WRITES, [1, 2], observers=2)
+    assert 'agent 1 has not announced itself' in problems
+    assert 'agent 2 has not announced itself' in problems
+    assert "1 of 2 observers announced (['/recorder'])" in problems
+
+
+def test_one_node_may_play_several_agents():
+    both = json.loads(announcement('/scripted', [], {'/agent_1/cmd': 1, '/agent_2/cmd': 1}))
+    assert unmet({'/scripted': both}, ['/agent_1/cmd', '/agent_2/cmd'], {}, [1, 2],
+                 observers=0) == []
