@@ -61,9 +61,9 @@ def test_two_agents_coming_into_range_fuse_densities_and_compute_the_same_joint_
         assert np.all(out[a].report.search_values >= reports[a].search_values * 0.999 - 1e-6)
     # The partition each computed alone is the joint plan of the two step-6 reports, their
     # densities predicted to step 7 with their senders' poses.
-    density = SearchDensity(agents[1].filter.search.lattice)
-    fused = np.maximum(*(density.predicted(r.search_values, r.pose, 1, params.sensor,
-                                           params.search.decay) for r in reports.values()))
+    density = SearchDensity(agents[1].filter.search.lattice, params)
+    fused = np.maximum(*(density.predicted(r.search_values, r.pose, 1)
+                         for r in reports.values()))
     node_values = agents[1].search_map_values(fused)
     nodes = unvisited_nodes(node_values, params.search.unvisited_threshold)
     expected = joint_plan({a: reports[a].pose for a in agents}, agents[1].search_map.centers,

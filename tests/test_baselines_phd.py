@@ -65,8 +65,8 @@ def test_steps_since_seen_inverts_the_decay_and_counts_never_seen_cells_from_the
 
 def test_the_birth_ratio_keeps_own_looks_and_scales_cells_a_teammate_saw_since():
     step, p_s = 60, PARAMS.motion.p_survival
-    own = SearchDensity(LATTICE)
-    own.correct((25.0, 25.0), PARAMS.sensor)                  # this agent looks now
+    own = SearchDensity(LATTICE, PARAMS)
+    own.correct((25.0, 25.0))                               # this agent looks now
     team = own.values.copy()
     team[70:80, 70:80] = PARAMS.search.decay ** 3           # a teammate looked 3 steps ago
     rho = team_birth_ratio(own.values, team, step, PARAMS)

@@ -26,10 +26,15 @@ def test_paper_yaml_is_the_documented_defaults():
 def test_the_strict_profile_is_the_default_with_every_addition_off():
     strict = load_params_file(REPO_ROOT / 'config' / 'paper_strict.yaml')
     switches = [item.name for item in fields(AdditionsParams)]
-    assert len(switches) >= 7 and all(getattr(SatParams().additions, name) for name in switches)
+    on = [name for name in switches if getattr(SatParams().additions, name)]
+    # The default is config/paper.yaml: every addition on but persistent search-and-track's,
+    # which config/persistent.yaml switches on (issue 15).
+    persistent = load_params_file(REPO_ROOT / 'config' / 'persistent.yaml')
+    assert len(on) >= 7 and all(getattr(persistent.additions, name) for name in switches)
+    assert persistent == SatParams().with_overrides({f'additions.{name}': True
+                                                     for name in switches})
     assert not any(getattr(strict.additions, name) for name in switches)
-    assert strict == SatParams().with_overrides({f'additions.{name}': False
-                                                 for name in switches})
+    assert strict == SatParams().with_overrides({f'additions.{name}': False for name in on})
 
 
 def test_nested_and_dotted_keys_agree():

@@ -13,7 +13,8 @@ from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import ablation_cells, Cell, CONFIG_COLUMNS, default_cell
-from sat_world_sim.study_design import DESIGNS, factorial_cells, prepare_cells, reference_of
+from sat_world_sim.study_design import DESIGNS, factorial_cells, persistent_ablation_cells
+from sat_world_sim.study_design import prepare_cells, reference_of
 
 CONFIG = Path(__file__).resolve().parent.parent / 'config'
 PAPER = load_scenario(CONFIG / 'scenarios' / 'paper.yaml')
@@ -96,6 +97,7 @@ def test_the_factorial_crosses_team_clutter_radio_and_policies():
 def test_ablation_cells_follow_the_fields_of_the_additions_group(monkeypatch):
     group = make_dataclass('AdditionParams', [('confirmation', bool, True),
                                               ('track_standoff', bool, True),
+                                              ('persistent_planning', bool, False),
                                               ('extraction_margin_m', float, 5.0)], frozen=True)
     with_additions = make_dataclass('WithAdditions', [
         ('additions', group, field(default_factory=group))], bases=(SatParams,), frozen=True)
@@ -106,6 +108,10 @@ def test_ablation_cells_follow_the_fields_of_the_additions_group(monkeypatch):
                                             (('additions.track_standoff', False),)]
     assert all(reference_of(c, cells + [default_cell('random')]) == default_cell('random')
                for c in cells)
+    # The additions off by default are the persistent profile's: its ablation switches them off.
+    (persistent,) = persistent_ablation_cells('random')
+    assert (persistent.profile, persistent.overrides) == (
+        'persistent', (('additions.persistent_planning', False),))
 
 
 def test_cells_that_cannot_be_built_yet_are_skipped_with_the_reason(tmp_path):

@@ -18,12 +18,17 @@ STEPS = 120
 KILL_AT = 30
 
 
-def agent_pid(parent: int, agent_id: int):
-    """Return the pid of the bring-up's child running agent <agent_id>, or None."""
-    result = subprocess.run(['pgrep', '-P', str(parent), '-f', f'agent_id:={agent_id}'],
+def child_pid(parent: int, pattern: str):
+    """Return the pid of the bring-up's child whose command line matches pattern, or None."""
+    result = subprocess.run(['pgrep', '-P', str(parent), '-f', pattern],
                             capture_output=True, text=True)
     pids = [int(p) for p in result.stdout.split()]
     return pids[0] if pids else None
+
+
+def writer_gids(node, topic: str) -> set:
+    """Return the gids of the writers the node's graph knows on topic (dead ones linger)."""
+    return {bytes(info.endpoint_gid) for info in node.get_publishers_info_by_topic(topic)}
 
 
 @pytest.mark.timeout(600)
@@ -39,9 +44,19 @@ def test_kill_and_respawn_under_radio_loss_completes_the_run(tmp_path):
         node.create_subscription(WorldStep, '/world/step', lambda m: steps.append(m.step), WORLD)
         spin_until(node, lambda: steps and steps[-1] >= KILL_AT, 180,
                    f'/world/step reaching step {KILL_AT}', (swarm,))
-        victim = agent_pid(swarm.pid, 2)
-        assert victim is not None, 'no agent_2 process under the bring-up'
-        os.kill(victim, signal.SIGKILL)
+        victim = child_pid(swarm.pid, 'agent_id:=2')
+        world = child_pid(swarm.pid, 'lib/sat_world_sim/world_sim')
+        assert victim is not None and world is not None, 'no agent_2 or world_sim process'
+        old = writer_gids(node, '/agent_2/cmd')
+        # The world steps on without an inactive agent, so the run could end before a slow
+        # respawn: world_sim is held until the new agent_2 has a command writer on the graph.
+        os.kill(world, signal.SIGSTOP)
+        try:
+            os.kill(victim, signal.SIGKILL)
+            spin_until(node, lambda: writer_gids(node, '/agent_2/cmd') - old, 120,
+                       'the respawned agent_2 writing /agent_2/cmd', (swarm,))
+        finally:
+            os.kill(world, signal.SIGCONT)
         out, err = swarm.communicate(timeout=scaled(480))
     assert swarm.returncode == 0, err[-3000:]
     assert out.strip().splitlines()[-1] == str(run_dir)

@@ -13,7 +13,7 @@ J = PARAMS.search.decay
 
 
 def _density(spacing=1.0):
-    return SearchDensity(Lattice.for_area(PARAMS.area, spacing))
+    return SearchDensity(Lattice.for_area(PARAMS.area, spacing), PARAMS)
 
 
 def _cell_value(density, point):
@@ -45,7 +45,7 @@ def test_new_density_is_unsearched():
 def test_visit_sets_the_square_to_one_and_nothing_else():
     density = _density()
     pose = np.array([30.0, 40.0])
-    density.correct(pose, SENSOR)
+    density.correct(pose)
     centers = density.lattice.centers()
     inside = np.max(np.abs(centers - pose), axis=1) <= SENSOR.square_side / 2
     np.testing.assert_array_equal(density.values.ravel(), inside.astype(float))
@@ -57,24 +57,24 @@ def test_visit_sets_the_square_to_one_and_nothing_else():
 def test_unobserved_node_value_is_j_to_the_k_and_one_after_a_visit(steps, node):
     density = _density()
     node = np.array([node])
-    density.correct(node[0], SENSOR)           # the 10 m square is the node's region
+    density.correct(node[0])           # the 10 m square is the node's region
     assert density.node_values(node, 10.0)[0] == 1.0
     away = np.array([5.0, 95.0])
     for _ in range(steps):
-        density.predict(away, SENSOR, J)
-        density.correct(away, SENSOR)
+        density.predict(away)
+        density.correct(away)
     assert density.node_values(node, 10.0)[0] == pytest.approx(J ** steps, rel=1e-12)
-    density.correct(node[0], SENSOR)
+    density.correct(node[0])
     assert density.node_values(node, 10.0)[0] == 1.0
 
 
 def test_cells_seen_from_the_previous_pose_do_not_decay():
     density = _density()
     pose = np.array([50.0, 50.0])
-    density.correct(pose, SENSOR)
-    density.predict(pose, SENSOR, J)
+    density.correct(pose)
+    density.predict(pose)
     assert _cell_value(density, pose) == 1.0
-    density.predict(pose + 40, SENSOR, J)
+    density.predict(pose + 40)
     assert _cell_value(density, pose) == pytest.approx(J)
 
 
@@ -85,17 +85,17 @@ def test_a_density_of_steps_ago_is_predicted_with_its_pose_then_decays_by_j(step
     theirs.values[:] = rng.random(theirs.values.shape)
     pose = np.array([30.0, 70.0])
     before = theirs.values.copy()
-    ahead = density.predicted(theirs.values, pose, steps, SENSOR, J)
+    ahead = density.predicted(theirs.values, pose, steps)
     np.testing.assert_array_equal(theirs.values, before)
     # One step of Eqn. satphd_predict at the pose of its step, then J per further step.
-    theirs.predict(pose, SENSOR, J)
+    theirs.predict(pose)
     np.testing.assert_allclose(ahead, theirs.values * J ** (steps - 1), rtol=1e-12)
     square = np.zeros(before.shape, dtype=bool)
     square[65:75, 25:35] = True
     np.testing.assert_allclose(ahead[square], before[square] * J ** (steps - 1), rtol=1e-12)
     np.testing.assert_allclose(ahead[~square], before[~square] * J ** steps, rtol=1e-12)
     with pytest.raises(ValueError, match='steps >= 1'):
-        density.predicted(before, pose, 0, SENSOR, J)
+        density.predicted(before, pose, 0)
 
 
 def test_node_value_is_the_mean_over_the_region():

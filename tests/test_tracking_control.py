@@ -5,8 +5,10 @@ import numpy as np
 import pytest
 
 from sat_agent import actions, sensor_model
+from sat_agent.beyond_paper.track_standoff import standoff_mask
 from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD, update_weights
+from sat_agent.search_density import Lattice, SearchDensity
 from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
 from sat_agent.tracking_control import (predicted_ideal_measurements, renyi_divergence,
                                         TrackingControl)
@@ -124,3 +126,48 @@ def test_track_standoff_switch_keeps_the_target_at_the_stand_off_or_takes_the_pu
     assert best == np.argmax(scores) != action
     assert np.hypot(*(actions.candidate_poses(POSE, PARAMS.actions)[best] - target)) < (
         PARAMS.cooperation.track_standoff)
+
+
+def _worth_to_the_north(params):
+    """Return a search density with undetected mass north of y = 55 (the rest just searched)."""
+    density = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing),
+                            params)
+    u = np.zeros(density.values.shape)
+    u[55:, :] = 1e-4
+    density.values = np.exp(-u)
+    return density
+
+
+@pytest.mark.parametrize('tolerance', [0.1, 0.2, 0.5])
+def test_search_while_tracking_covers_search_worth_within_its_bound(tolerance):
+    # A tight target cloud east of the agent, fresh ground to the north: the agent gives up at
+    # most epsilon of the best Renyi score to cover worth, and covers more than the best
+    # action does.
+    params = PARAMS.with_overrides({'additions.search_while_tracking': True,
+                                    'cooperation.track_search_tolerance': tolerance})
+    target = POSE + np.array([1.0, 0.0])
+    cloud, estimate = _cloud(target, spread=0.3), _estimate(target)
+    search = _worth_to_the_north(params)
+    action, scores = TrackingControl(params).action(cloud, estimate, POSE, search)
+    best, paper_scores = CONTROL.action(cloud, estimate, POSE)
+    np.testing.assert_array_equal(scores, paper_scores)
+    assert scores[action] >= (1.0 - tolerance) * scores[best]
+    poses = actions.candidate_poses(POSE, PARAMS.actions)
+    worth = search.square_worth(poses)
+    assert worth[action] > worth[best]
+    # No other stand-off action within the bound covers more worth.
+    near = standoff_mask(poses, estimate.positions(), params) & (
+        scores >= (1.0 - tolerance) * scores[best])
+    assert worth[action] == worth[near].max()
+
+
+def test_search_while_tracking_switch_off_or_zero_tolerance_takes_the_best_score():
+    target = POSE + np.array([1.0, 0.0])
+    cloud, estimate = _cloud(target, spread=0.3), _estimate(target)
+    best, _ = CONTROL.action(cloud, estimate, POSE, _worth_to_the_north(PARAMS))
+    zero = PARAMS.with_overrides({'additions.search_while_tracking': True,
+                                  'cooperation.track_search_tolerance': 0.0})
+    assert TrackingControl(zero).action(cloud, estimate, POSE,
+                                        _worth_to_the_north(zero))[0] == best
+    on = PARAMS.with_overrides({'additions.search_while_tracking': True})
+    assert TrackingControl(on).action(cloud, estimate, POSE, _worth_to_the_north(on))[0] != best

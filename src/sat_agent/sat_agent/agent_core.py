@@ -53,6 +53,8 @@ from sat_agent.baselines.interface import BaselineView
 from sat_agent.beyond_paper.investigation import (
     Investigation, keep_in_view_action, Look, NO_LOOK)
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
+from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
+from sat_agent.beyond_paper.track_release import TrackRelease
 from sat_agent.config import ParameterError, SatParams
 from sat_agent.density_codec import encode_density
 from sat_agent.mode_machine import Mode, ModeMachine
@@ -79,6 +81,8 @@ _TARGET_BYTES = 8 * (2 + 2 + 16 + 1)
 # spawns its truth and sensor streams with keys (0,), (1,), ... (SeedSequence.spawn); a filter
 # keyed (agent_id,) would replay its own sensor's draws, so its noise would not be independent.
 FILTER_STREAM = 2 ** 16
+# Replans every searching member of a group sees at the same step, so they plan jointly.
+JOINT_REASONS = (ReplanReason.NEW_NEIGHBOUR, ReplanReason.RELEASED, ReplanReason.PERIODIC)
 
 
 def wire_bytes(kind: str, count: int = 0) -> int:
@@ -156,6 +160,15 @@ class NoInvestigation:
         return NO_LOOK
 
 
+class KeepAll:
+    """The paper's tracking agent steers for every target it estimates."""
+
+    def keep(self, targets: MultiTargetEstimate, own: Optional[AgentReport],
+             reports: Sequence[AgentReport]) -> MultiTargetEstimate:
+        """Return targets unchanged."""
+        return targets
+
+
 class Agent:
     """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
 
@@ -173,7 +186,8 @@ class Agent:
         additions = params.additions
         self.extractor = (PeakExtractor if additions.peak_extraction else NHatExtractor)(params)
         self.search_map = SearchMap.for_area(params.area, params.search.node_spacing)
-        self.planner = SearchPlanner(self.search_map, params)
+        self.planner = (PersistentPlanner if additions.persistent_planning
+                        else SearchPlanner)(self.search_map, params)
         # The evaluation's baselines (search.policy, baselines/); None for the paper's policy.
         self.baseline = baseline_policy(params, self.search_map, self.agent_id, initial_pose,
                                         seed)
@@ -182,7 +196,8 @@ class Agent:
         self.tracking = TrackingControl(params)
         self.investigation = (Investigation(params) if additions.investigation
                               else NoInvestigation())
-        self._scratch = SearchDensity(self.filter.search.lattice)
+        self.release = TrackRelease(params) if additions.track_release else KeepAll()
+        self._scratch = SearchDensity(self.filter.search.lattice, params)
         self._last_report: Optional[AgentReport] = None
         self.dropped_reports = 0
         self._previous_searchers: frozenset = frozenset()
@@ -249,17 +264,20 @@ class Agent:
 
         A baseline that steers tracking too is the whole controller. Otherwise, TRACK or a look
         at tentative peaks from SEARCH: the tracking control on X-hat_{k+1|k} (the looked-at
-        peaks; in SEARCH the walk is kept for later); else the search move (walk or baseline),
-        kept to hold a newborn spot in view when the look asks it.
+        peaks; in SEARCH the walk is kept for later; in TRACK without the targets released to a
+        neighbour, additions.track_release); else the search move (walk or baseline), kept to
+        hold a newborn spot in view when the look asks it.
         """
         if self.baseline is not None and self.baseline.steers_tracking:
             return self.baseline.choose(pose, view)
         look = self.investigation.look(mode, estimate, self.modes.cooldown_left,
                                        self.filter.birth_spots)
         if mode == Mode.TRACK or look.peaks is not None:
-            targets = look.peaks if mode == Mode.SEARCH else self.extractor.estimate(
-                self.filter.targets, pose)[0]
-            action, _ = self.tracking.action(self.filter.targets, targets, pose)
+            targets = look.peaks if mode == Mode.SEARCH else self.release.keep(
+                self.extractor.estimate(self.filter.targets, pose)[0], self._last_report,
+                view.reports)
+            action, _ = self.tracking.action(self.filter.targets, targets, pose,
+                                             self.filter.search)
             plan = self.planner.walk_points() if mode == Mode.SEARCH else np.zeros((0, 2))
             return action, candidate_poses(pose, self.params.actions)[action], plan
         action, goal, plan = (self.planner.choose(pose) if self.baseline is None
@@ -342,7 +360,7 @@ class Agent:
         group = frozenset([self.agent_id] + [r.agent_id for r in searching])
         released = any(r.mode != Mode.SEARCH and r.agent_id in self.planner.group
                        for r in reports)
-        reason = self.planner.needs_replan(group, released, resumed)
+        reason = self.planner.needs_replan(group, released, resumed, step)
         joined = self.agent_id in searchers and bool(searchers - self._previous_searchers)
         if not reason and joined and searching:
             # The planner's last verdict is NONE, so plan() below makes a joint plan.
@@ -351,7 +369,7 @@ class Agent:
             return reason
         own = self._last_report
         joint = (searching and own is not None and own.mode == Mode.SEARCH
-                 and reason in (ReplanReason.NEW_NEIGHBOUR, ReplanReason.RELEASED))
+                 and reason in JOINT_REASONS)
         if joint:
             members = [own] + searching
             starts = {r.agent_id: r.pose for r in members}
@@ -365,10 +383,13 @@ class Agent:
 
     def _density_at(self, step: int, report: AgentReport) -> np.ndarray:
         """Return the report's search density predicted from its step to step (search_density)."""
-        return self._scratch.predicted(report.search_values, report.pose, step - report.step,
-                                       self.params.sensor, self.params.search.decay)
+        return self._scratch.predicted(report.search_values, report.pose, step - report.step)
 
     def search_map_values(self, density_values: np.ndarray) -> np.ndarray:
-        """Eqn. search_value of every search-map node for a (ny, nx) search density."""
+        """Return what the planner knows of each node for a (ny, nx) search density.
+
+        Eqn. search_value; with additions.persistent_planning the node's worth
+        (beyond_paper/persistent_planning.py).
+        """
         self._scratch.values = density_values
-        return self._scratch.node_values(self.search_map.centers, self.search_map.spacing)
+        return self.planner.node_values(self._scratch)

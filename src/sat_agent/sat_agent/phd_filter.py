@@ -227,7 +227,8 @@ class SatPhdFilter:
         self.params = params
         self.rng = rng
         self.targets = ParticlePHD.empty()
-        self.search = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing))
+        self.search = SearchDensity(
+            Lattice.for_area(params.area, params.search.lattice_spacing), params)
         # Measurement-driven births from the last scan, joining the targets at the next predict.
         self.pending_births = ParticlePHD.empty()
         # Where pending_births were seeded: a searching agent may look there again (agent_core).
@@ -249,7 +250,7 @@ class SatPhdFilter:
                                    np.concatenate([weights, born.weights]))
         self._newborn = slice(survivors, len(moving))
         self.pending_births = ParticlePHD.empty()
-        self.search.predict(previous_pose, params.sensor, params.search.decay)
+        self.search.predict(previous_pose)
 
     def correct(self, measurements: np.ndarray, pose) -> None:
         """Eqn. satphd_correct: PHD update, search correction, births for k+1, resampling."""
@@ -261,7 +262,7 @@ class SatPhdFilter:
                                          params.sensor)
         weights[self._newborn.start + np.flatnonzero(dropped)] = 0.0
         self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
-        self.search.correct(pose, params.sensor)
+        self.search.correct(pose)
         self.birth_spots = birth_spots(measurements, pose, params, explained)
         self.pending_births = measurement_births(self.birth_spots, pose, params, self.rng)
         self._newborn = slice(0, 0)

@@ -20,6 +20,12 @@ a cell was searched, and whatever the sender did see since reaches the receiver 
 newer reports. Without the prediction two agents in range hand a "just searched" value back and
 forth (each step's max takes the other's undecayed value) and their densities never age.
 
+How the values are predicted and corrected is chosen once, when the density is built
+(``search_model``): ``ConstantDecay`` is the paper's J; the addition
+``additions.regrowing_density`` replaces it with beyond_paper/regrowing_density.py's
+``Regrowth`` (the undetected targets of the filter's own model, with J constant as its special
+case).
+
 With this convention Eqn. search_value reduces to a mean over the node's region r_v:
 p_search(r_v) = (integral over r_v of D^0) / (|r_v| / |A|)
              = (sum over cells c in r_v of D^0_c s^2) / (n_v s^2 / |A|)
@@ -31,7 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sat_agent.config import AreaParams, ParameterError, SensorParams
+from sat_agent.beyond_paper.regrowing_density import expected_undetected, Regrowth
+from sat_agent.config import AreaParams, ParameterError, SatParams
 
 
 @dataclass(frozen=True)
@@ -73,12 +80,52 @@ class Lattice:
         return np.column_stack([x.ravel(), y.ravel()])
 
 
-class SearchDensity:
-    """Virtual-target part of the SAT-PHD (Eqns. satphd_predict, satphd_correct, search_value)."""
+class ConstantDecay:
+    """The paper's search density model: J constant, p_D of virtual targets 1 in the square."""
 
-    def __init__(self, lattice: Lattice):
+    # Never observed (the paper's initial value).
+    initial = 0.0
+
+    def __init__(self, decay: float):
+        self.decay = decay
+
+    def predicted(self, values: np.ndarray, window, steps: int) -> np.ndarray:
+        """Return values predicted `steps` steps ahead: window held in the first, J elsewhere.
+
+        One step of the third line of Eqn. satphd_predict (p_D of virtual targets is 1 in the
+        previous pose's square, so those cells keep their value and the others decay by J),
+        then J for each further step.
+        """
+        ahead = np.array(values, dtype=float)
+        kept = None if window is None else ahead[window].copy()
+        ahead *= self.decay ** steps
+        if kept is not None:
+            ahead[window] = kept * self.decay ** (steps - 1)
+        return ahead
+
+    def corrected(self, seen: np.ndarray) -> np.ndarray:
+        """Last two terms of Eqn. satphd_correct in stored units: observed cells become 1."""
+        return np.ones_like(seen)
+
+
+def search_model(params: SatParams, lattice: Lattice):
+    """Return the prediction/correction model of the search density (module docstring)."""
+    if params.additions.regrowing_density:
+        return Regrowth(params, lattice.nx * lattice.ny, lattice.spacing)
+    return ConstantDecay(params.search.decay)
+
+
+class SearchDensity:
+    """Virtual-target part of the SAT-PHD (Eqns. satphd_predict, satphd_correct, search_value).
+
+    The model (``search_model``) is chosen once from params.
+    """
+
+    def __init__(self, lattice: Lattice, params: SatParams):
         self.lattice = lattice
-        self.values = np.zeros((lattice.ny, lattice.nx))
+        self.model = search_model(params, lattice)
+        self.values = np.full((lattice.ny, lattice.nx), self.model.initial)
+        self._side = params.sensor.square_side
         self._xc = lattice.x_centers()
         self._yc = lattice.y_centers()
 
@@ -94,39 +141,33 @@ class SearchDensity:
             return None
         return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
 
-    def predict(self, previous_pose, sensor: SensorParams, decay: float) -> None:
+    def predict(self, previous_pose) -> None:
         """Third line of Eqn. satphd_predict: D^0 <- [(1 - p_D(s_{k-1})) J + p_D(s_{k-1})] D^0.
 
         p_D of virtual targets is 1 inside the previous pose's square, so those cells keep their
-        value and every other cell decays by J.
+        value and every other cell decays by J (with the regrowing model: regrows).
         """
-        self.values = self.predicted(self.values, previous_pose, 1, sensor, decay)
+        self.values = self.predicted(self.values, previous_pose, 1)
 
-    def predicted(self, values: np.ndarray, pose, steps: int, sensor: SensorParams,
-                  decay: float) -> np.ndarray:
+    def predicted(self, values: np.ndarray, pose, steps: int) -> np.ndarray:
         """Return a density of this lattice, the posterior of `steps` steps ago, predicted to now.
 
-        One step of Eqn. satphd_predict with pose (the pose of its step), then J for each
-        further step (module docstring). values is not changed.
+        One step of Eqn. satphd_predict with pose (the pose of its step), then one step with no
+        square for each further step (module docstring). values is not changed.
         """
         if steps < 1:
             raise ValueError(f'a density is predicted forward by steps >= 1, got {steps}')
-        ahead = np.array(values, dtype=float)
-        window = self._observed_window(pose, sensor.square_side)
-        kept = None if window is None else ahead[window].copy()
-        ahead *= decay ** steps
-        if kept is not None:
-            ahead[window] = kept * decay ** (steps - 1)
-        return ahead
+        return self.model.predicted(values, self._observed_window(pose, self._side), steps)
 
-    def correct(self, pose, sensor: SensorParams) -> None:
+    def correct(self, pose) -> None:
         """Last two terms of Eqn. satphd_correct: D^0 <- p_D / |A| + (1 - p_D) D^0_{k|k-1}.
 
-        In stored units (times |A|) the observed cells become 1 and the others are unchanged.
+        In stored units (times |A|) the observed cells become 1 (with the regrowing model:
+        v^(1 - p_D)) and the others are unchanged.
         """
-        window = self._observed_window(pose, sensor.square_side)
+        window = self._observed_window(pose, self._side)
         if window is not None:
-            self.values[window] = 1.0
+            self.values[window] = self.model.corrected(self.values[window])
 
     def node_values(self, node_centers: np.ndarray, node_spacing: float) -> np.ndarray:
         """Eqn. search_value for every node: the mean of values over its region r_v.
@@ -137,6 +178,34 @@ class SearchDensity:
         the value of the cell nearest to the node. Rectangle sums come from a summed-area table,
         so the cost does not depend on the node size.
         """
+        sums, counts, nearest = self._region_sums(self.values, node_centers, node_spacing)
+        return np.where(counts > 0, sums / np.maximum(counts, 1), nearest)
+
+    def node_worth(self, node_centers: np.ndarray, node_spacing: float) -> np.ndarray:
+        """Return the expected undetected targets in each node's region: sum of u over r_v.
+
+        The regions are node_values'; a region holding no cell centre gets its nearest cell's
+        u (beyond_paper/regrowing_density.py: v = exp(-u)).
+        """
+        sums, counts, nearest = self._region_sums(expected_undetected(self.values),
+                                                  node_centers, node_spacing)
+        return np.where(counts > 0, sums, nearest)
+
+    def square_worth(self, poses: np.ndarray) -> np.ndarray:
+        """Return the expected undetected targets in S_a(pose) for each of (U, 2) poses.
+
+        The sum of u = -ln v over the cells the square observes (as ``correct`` would).
+        """
+        u = expected_undetected(self.values)
+        worth = np.zeros(len(poses))
+        for index, pose in enumerate(np.asarray(poses, dtype=float).reshape(-1, 2)):
+            window = self._observed_window(pose, self._side)
+            worth[index] = 0.0 if window is None else u[window].sum()
+        return worth
+
+    def _region_sums(self, cell_values: np.ndarray, node_centers: np.ndarray,
+                     node_spacing: float):
+        """Per node: (sum of cell_values over r_v, cells in r_v, value of the nearest cell)."""
         centers = np.asarray(node_centers, dtype=float).reshape(-1, 2)
         half = node_spacing / 2.0
         x0 = np.searchsorted(self._xc, centers[:, 0] - half, side='left')
@@ -144,12 +213,12 @@ class SearchDensity:
         y0 = np.searchsorted(self._yc, centers[:, 1] - half, side='left')
         y1 = np.searchsorted(self._yc, centers[:, 1] + half, side='left')
         table = np.zeros((self.lattice.ny + 1, self.lattice.nx + 1))
-        np.cumsum(np.cumsum(self.values, axis=0), axis=1, out=table[1:, 1:])
+        np.cumsum(np.cumsum(cell_values, axis=0), axis=1, out=table[1:, 1:])
         sums = table[y1, x1] - table[y0, x1] - table[y1, x0] + table[y0, x0]
         counts = (x1 - x0) * (y1 - y0)
-        nearest = self.values[self._nearest_index(self._yc, centers[:, 1]),
+        nearest = cell_values[self._nearest_index(self._yc, centers[:, 1]),
                               self._nearest_index(self._xc, centers[:, 0])]
-        return np.where(counts > 0, sums / np.maximum(counts, 1), nearest)
+        return sums, counts, nearest
 
     @staticmethod
     def _nearest_index(grid: np.ndarray, coords: np.ndarray) -> np.ndarray:

@@ -37,12 +37,18 @@ import numpy as np
 from sat_agent.actions import admissible_mask, candidate_poses
 from sat_agent.beyond_paper import drop_searched_nodes, exhaustion_claims, revisit_fallback
 from sat_agent.config import SatParams
+from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import nodes_in_view, SearchMap, unvisited_nodes
 from sat_agent.sensor_model import in_sensing_square
 
 # Costs are compared after rounding to this many decimals (1e-9 m): far below any distance
 # that matters, far above float64 rounding error on distances of a few km.
 COST_DECIMALS = 9
+# Worth per metre (persistent planning): worth relative to the largest is rounded to 1e-6, so
+# nodes regrown alike tie exactly and the nearer one (then the lower index) wins; a node at
+# the head costs MIN_COST (1e-9 m), not 0.
+WORTH_DECIMALS = 6
+MIN_COST = 10.0 ** -COST_DECIMALS
 
 
 def _costs(head, points: np.ndarray) -> np.ndarray:
@@ -66,22 +72,40 @@ def _point(value) -> np.ndarray:
     return point
 
 
-def _grow_walks(starts: np.ndarray, centers: np.ndarray, nodes: Sequence[int]) -> list:
-    """Grow one walk per start, one node at a time in start order (path-cheapest-arc)."""
+def _grow_walks(starts: np.ndarray, centers: np.ndarray, nodes: Sequence[int],
+                worth: Optional[np.ndarray] = None) -> list:
+    """Grow one walk per start, one node at a time in start order (path-cheapest-arc).
+
+    With worth (one value >= 0 per node of the map), each walker instead takes the free node
+    of the highest worth per metre from its head (beyond_paper/persistent_planning.py).
+    """
     centers = np.asarray(centers, dtype=float)
     candidates = _node_array(nodes, len(centers))
     points = centers[candidates]
     free = np.ones(len(candidates), dtype=bool)
     head_costs = [_costs(start, points) for start in starts]
     walks = [[] for _ in starts]
+    value = None if worth is None else _relative_worth(worth, candidates)
     for taken in range(len(candidates)):
         walker = taken % len(starts)
         # argmin returns the first minimum; candidates ascend, so ties go to the lowest index.
-        pick = int(np.argmin(np.where(free, head_costs[walker], np.inf)))
+        if value is None:
+            pick = int(np.argmin(np.where(free, head_costs[walker], np.inf)))
+        else:
+            rate = value / np.maximum(head_costs[walker], MIN_COST)
+            pick = int(np.argmin(np.where(free, -rate, np.inf)))
         free[pick] = False
         walks[walker].append(int(candidates[pick]))
         head_costs[walker] = _costs(points[pick], points)
     return walks
+
+
+def _relative_worth(worth: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    """Return the candidates' worth over the largest, rounded to WORTH_DECIMALS (exact ties)."""
+    value = np.asarray(worth, dtype=float).reshape(-1)[candidates]
+    top = value.max(initial=0.0)
+    # No worth anywhere: every node alike, so the nearest is taken.
+    return np.round(value / top, WORTH_DECIMALS) if top > 0.0 else np.ones(value.size)
 
 
 def greedy_closed_walk(start, centers: np.ndarray, nodes: Sequence[int]) -> list:
@@ -94,24 +118,25 @@ def greedy_closed_walk(start, centers: np.ndarray, nodes: Sequence[int]) -> list
 
 
 def joint_plan(starts: Mapping[int, Sequence[float]], centers: np.ndarray,
-               nodes: Sequence[int]) -> dict:
+               nodes: Sequence[int], worth: Optional[np.ndarray] = None) -> dict:
     """Joint search plan of a group (paper's "Cooperation"): agent id -> its closed walk.
 
     starts maps every agent of the group (own id included) to its position. The walks grow
     one node at a time in ascending agent id; the result does not depend on the order of the
-    mapping or of `nodes`.
+    mapping or of `nodes`. worth: see _grow_walks.
     """
     if not starts:
         raise ValueError('a joint plan needs at least one agent')
     ids = sorted(int(agent) for agent in starts)
-    walks = _grow_walks([_point(starts[agent]) for agent in ids], centers, nodes)
+    walks = _grow_walks([_point(starts[agent]) for agent in ids], centers, nodes, worth)
     return dict(zip(ids, walks))
 
 
 def planned_walks(starts: Mapping[int, Sequence[float]], centers: np.ndarray,
-                  nodes: Sequence[int], planner: str = 'greedy') -> dict:
+                  nodes: Sequence[int], planner: str = 'greedy',
+                  worth: Optional[np.ndarray] = None) -> dict:
     """joint_plan's walks, improved by OR-Tools local search when planner is 'ortools'."""
-    walks = joint_plan(starts, centers, nodes)
+    walks = joint_plan(starts, centers, nodes, worth)
     if planner == 'ortools':
         # Imported here: OR-Tools (and its protobuf runtime) loads only when it is chosen.
         from sat_agent.routing import improve_walks
@@ -155,6 +180,8 @@ class NoClaims:
         """Return every node: all are free."""
         return nodes
 
+    free = unclaimed
+
 
 def own_visits_only(values: np.ndarray, planned: Optional[np.ndarray],
                     beta: float) -> np.ndarray:
@@ -171,6 +198,8 @@ class ReplanReason(enum.IntEnum):
     RELEASED = 3       # a group member left SEARCH: its nodes are free again (Fig. 4h)
     NEW_NEIGHBOUR = 4  # first contact with a searching agent outside the plan's group
     EXHAUSTED = 5      # every node of the own walk is visited
+    PERIODIC = 6       # additions.persistent_planning: a joint replan at every replan_period
+    DECAYED = 7        # additions.persistent_planning: the walk collects too little worth
 
 
 class SearchPlanner:
@@ -252,12 +281,13 @@ class SearchPlanner:
         return dropped
 
     def needs_replan(self, group: frozenset, released: bool,
-                     resumed: bool = False) -> ReplanReason:
+                     resumed: bool = False, step: int = 0) -> ReplanReason:
         """Whether to plan again (the returned ReplanReason is falsy when not).
 
         group: ids of the agents in radio range that are in SEARCH (own id may be included).
         released: a member of the plan's group was seen to leave SEARCH.
         resumed: this agent has just returned to SEARCH.
+        step: the step k (the persistent planner's periodic replans).
         """
         if self._start is None:
             reason = ReplanReason.NO_PLAN
@@ -267,12 +297,28 @@ class SearchPlanner:
             reason = ReplanReason.RELEASED
         elif not frozenset(group) <= self._group:
             reason = ReplanReason.NEW_NEIGHBOUR
+        elif self._periodic(step, frozenset(group)):
+            reason = ReplanReason.PERIODIC
         elif not self._walk.size:
             reason = ReplanReason.EXHAUSTED
+        elif self._decayed():
+            reason = ReplanReason.DECAYED
         else:
             reason = ReplanReason.NONE
         self._reason = reason
         return reason
+
+    def _periodic(self, step: int, group: frozenset) -> bool:
+        """Whether step is due for a periodic replan with group: never in the paper."""
+        return False
+
+    def _decayed(self) -> bool:
+        """Whether the walk's value has decayed: never in the paper (J only lowers values)."""
+        return False
+
+    def node_values(self, density: SearchDensity) -> np.ndarray:
+        """Return what the planner knows of each node: Eqn. search_value (1 = just searched)."""
+        return density.node_values(self._map.centers, self._map.spacing)
 
     def plan(self, own_id: int, starts: Mapping[int, Sequence[float]], node_values) -> list:
         """Plan over the unvisited nodes (p_search <= beta); joint when starts has others.
@@ -288,11 +334,11 @@ class SearchPlanner:
         if values.size != self._map.size:
             raise ValueError(f'{values.size} search values for {self._map.size} nodes')
         own_start = _point(starts[own_id])
-        if self._reason == ReplanReason.EXHAUSTED:
+        if self._reason in (ReplanReason.EXHAUSTED, ReplanReason.DECAYED):
             self._plan_alone(own_id, own_start, values)
         else:
             walks = planned_walks(starts, self._map.centers, self._nodes_to_search(values),
-                                  self._params.search.planner)
+                                  self._params.search.planner, self._walk_worth(values))
             self._walk = np.asarray(walks.pop(int(own_id)), dtype=np.int64)
             self._claims.remember(walks)
             self._group = frozenset(int(agent) for agent in starts)
@@ -302,14 +348,22 @@ class SearchPlanner:
         return self._walk.tolist()
 
     def _plan_alone(self, own_id: int, start: np.ndarray, node_values: np.ndarray):
-        # The nodes in view are visited (class docstring).
-        values = node_values.copy()
-        values[nodes_in_view(self._map, start, self._params.sensor.square_side)] = 1.0
-        nodes = self._claims.unclaimed(self._nodes_to_search(values))
+        in_view = nodes_in_view(self._map, start, self._params.sensor.square_side)
+        nodes = self._claims.unclaimed(self._nodes_out_of_view(node_values, in_view))
         walks = planned_walks({own_id: start}, self._map.centers, nodes,
-                              self._params.search.planner)
+                              self._params.search.planner, self._walk_worth(node_values))
         self._walk = np.asarray(walks[own_id], dtype=np.int64)
         self._group = self._group | {int(own_id)}
+
+    def _nodes_out_of_view(self, node_values: np.ndarray, in_view: np.ndarray) -> np.ndarray:
+        """Return the nodes to search, those in view counting as visited (class docstring)."""
+        values = node_values.copy()
+        values[in_view] = 1.0
+        return self._nodes_to_search(values)
+
+    def _walk_worth(self, node_values: np.ndarray) -> Optional[np.ndarray]:
+        """Node worth for the walks' growth: None, the paper's path-cheapest-arc."""
+        return None
 
     def next_goal(self):
         """Centre of the next unvisited node; the walk's start once all are visited; else None."""

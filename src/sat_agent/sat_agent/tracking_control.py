@@ -13,18 +13,24 @@ D_hat_k(u), and the score is the Renyi divergence between the two Poisson multi-
 in particle form (both densities share the particles, D_hat = f D):
     xi(u) = sum w + alpha / (1 - alpha) sum w_hat - 1 / (1 - alpha) sum w^(1 - alpha) w_hat^alpha.
 
-The paper's control is the argmax of xi over the admissible actions (``every_action``). The
-addition ``additions.track_standoff`` limits the argmax to the actions keeping the targets at a
-stand-off inside the square (beyond_paper/track_standoff.py); it is chosen once, in
-``TrackingControl``.
+The paper's control is the argmax of xi over the admissible actions (``every_action``,
+``best_score``). The addition ``additions.track_standoff`` limits the argmax to the actions
+keeping the targets at a stand-off inside the square (beyond_paper/track_standoff.py);
+``additions.search_while_tracking`` takes, among the actions within a bounded loss of the best
+score, the one covering the most search worth (beyond_paper/search_while_tracking.py). Both are
+chosen once, in ``TrackingControl``.
 """
+
+from typing import Optional
 
 import numpy as np
 
 from sat_agent import actions, motion_model, sensor_model
+from sat_agent.beyond_paper.search_while_tracking import SearchWhileTracking
 from sat_agent.beyond_paper.track_standoff import standoff_mask
 from sat_agent.config import SatParams, SensorParams
 from sat_agent.phd_filter import ParticlePHD, update_weights
+from sat_agent.search_density import SearchDensity
 from sat_agent.state_extraction import MultiTargetEstimate
 
 
@@ -57,20 +63,31 @@ def every_action(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> n
     return np.ones(len(poses), dtype=bool)
 
 
+def best_score(scores: np.ndarray, candidates: np.ndarray, poses: np.ndarray,
+               search: Optional[SearchDensity]) -> int:
+    """Return the paper's choice: the candidate with the highest score (ties: lowest index)."""
+    return int(np.argmax(np.where(candidates, scores, -np.inf)))
+
+
 class TrackingControl:
-    """The tracking control of one agent, its action mask chosen once (module docstring)."""
+    """The tracking control of one agent, its mask and choice chosen once (module docstring)."""
 
     def __init__(self, params: SatParams):
         self.params = params
-        self._preferred = standoff_mask if params.additions.track_standoff else every_action
+        additions = params.additions
+        self._preferred = standoff_mask if additions.track_standoff else every_action
+        self._choose = (SearchWhileTracking(params.cooperation.track_search_tolerance)
+                        if additions.search_while_tracking else best_score)
 
-    def action(self, predicted: ParticlePHD, estimates: MultiTargetEstimate, pose):
+    def action(self, predicted: ParticlePHD, estimates: MultiTargetEstimate, pose,
+               search: Optional[SearchDensity] = None):
         """Return (action index, scores (n_actions,)) maximising Eqn. track_control.
 
         Inadmissible actions score -inf. The argmax runs over the admissible actions the mask
         prefers when there are any, else over all admissible actions. Ties go to the lowest
         index (np.argmax), so when no action is informative (all scores 0) the agent stays
-        (action 0) if staying is preferred.
+        (action 0) if staying is preferred. search: the search density predicted to k+1, for
+        additions.search_while_tracking.
         """
         params = self.params
         sensor = params.sensor
@@ -89,6 +106,5 @@ class TrackingControl:
             z = predicted_ideal_measurements(estimates, poses[action], sensor)
             posterior = update_weights(states, weights, z, poses[action], sensor)
             scores[action] = renyi_divergence(weights, posterior, alpha)
-        if not preferred.any():
-            return int(np.argmax(scores)), scores
-        return int(np.argmax(np.where(preferred, scores, -np.inf))), scores
+        candidates = preferred if preferred.any() else allowed
+        return self._choose(scores, candidates, poses, search), scores

@@ -22,9 +22,11 @@ every paired comparison), SAT-PHD strict (config/paper_strict.yaml, the paper as
 radio (C_R = 0), lawnmower, random walk, SAT-PHD with OR-Tools walks, the oracle sweep
 (oracle_sweep.py, the ceiling) and issue 15's cells: the persistent profile
 (config/persistent.yaml) and the PHD-Voronoi and Thompson-sampling PHD baselines
-(``search.policy`` FUTURE_POLICIES). The ablation (``ablation_cells``): the default profile with
+(``search.policy`` FIELD_BASELINES). The ablation (``ablation_cells``): the default profile with
 each addition to the paper switched off alone, one cell per bool field of the parameter group
-``additions`` (sat_agent.config), so the study follows the core without a second list. Sweeps
+``additions`` (sat_agent.config) that is on by default, so the study follows the core without a
+second list; the persistent profile's ablation (``persistent_ablation_cells``, in ``full``):
+that profile with each of the additions it switches on (those off by default) off alone. Sweeps
 around the random default (``sweep_cells``): 2 or 8 agents, lambda 0 or 30, C_R 25 m or
 unlimited. The factorial (``factorial_cells``): agents {2, 4, 8} x lambda {0, 10, 30} x
 C_R {0, 25, 50, unlimited} x the policies of FACTORIAL_POLICIES at the random setting, plus the
@@ -44,12 +46,13 @@ per seed, 50 seeds on 2 cores ~29 min, and ~40 min once issue 15's three cells p
 exist (counted at SAT-PHD's cost; ``evaluate --dry-run`` prints the estimate from the last
 study's costs). Not in it, reachable with ``--design full`` or ``--only``: OR-Tools walks
 (+5 min), the paper setting's other policies, the ablation at paper and random (+22 min at
-random) and the sweeps (+18 min); should issue 15's cells cost more than counted, the next
+random), the persistent profile's ablation at random (4 cells, ~+12 min) and the sweeps
+(+18 min); should issue 15's cells cost more than counted, the next
 to move there are the random walk and no-radio cells at paper_random (-2 min).
 
 Cells that cannot be built on this checkout (a profile file that does not exist yet, a policy
-or parameter the core does not know yet) are skipped with a message, not an error
-(``prepare_cells``): issue 15's cells are listed before they exist.
+or parameter the core does not know yet, e.g. on an older checkout) are skipped with a
+message, not an error (``prepare_cells``).
 
 Reference of a paired comparison (``reference_of``): for a cell of another configuration than
 cooperative SAT-PHD (profile ``paper``, policy ``sat``, greedy walks, no overrides), the
@@ -80,9 +83,9 @@ STRICT_PROFILE = 'paper_strict'
 PERSISTENT_PROFILE = 'persistent'
 ORACLE = 'oracle_sweep'
 ADDITIONS_GROUP = 'additions'
-# search.policy names of issue 15's baselines (PHD-weighted Voronoi, Dames 2020; Thompson
-# sampling, Banerjee & Schneider 2024); their cells run once the core knows these names.
-FUTURE_POLICIES = ('phd_voronoi', 'thompson')
+# search.policy names of issue 15's baselines from the field (PHD-weighted Voronoi, Dames 2020;
+# Thompson sampling, Banerjee & Schneider 2024; sat_agent/baselines/).
+FIELD_BASELINES = ('phd_voronoi', 'thompson')
 
 REFERENCE_LABEL = 'SAT-PHD (cooperative)'
 STRICT_LABEL = 'SAT-PHD strict (paper as written)'
@@ -171,23 +174,26 @@ def policy_cells(setting: str) -> List[Cell]:
              cell(setting, 'random walk', policy='random_walk'),
              cell(setting, 'SAT-PHD + OR-Tools', planner='ortools'),
              cell(setting, ORACLE_LABEL, policy=ORACLE, planner='none')]
-    return cells + future_cells(setting)
+    return cells + persistent_cells(setting)
 
 
-def future_cells(setting: str) -> List[Cell]:
+def persistent_cells(setting: str) -> List[Cell]:
     """Return issue 15's cells: the persistent profile and two baselines (module docstring)."""
     return [default_cell(setting, PERSISTENT_LABEL, profile=PERSISTENT_PROFILE),
-            default_cell(setting, 'PHD-Voronoi', policy=FUTURE_POLICIES[0]),
-            default_cell(setting, 'Thompson-sampling PHD', policy=FUTURE_POLICIES[1])]
+            default_cell(setting, 'PHD-Voronoi', policy=FIELD_BASELINES[0]),
+            default_cell(setting, 'Thompson-sampling PHD', policy=FIELD_BASELINES[1])]
 
 
-def addition_names() -> List[str]:
-    """Return the bool fields of SatParams' ``additions`` group in order (none before it)."""
+def addition_names(default: bool = True) -> List[str]:
+    """Return the bool fields of SatParams' ``additions`` group whose default is ``default``.
+
+    In order; none before the group exists.
+    """
     group = next((f for f in fields(SatParams) if f.name == ADDITIONS_GROUP), None)
     if group is None:
         return []
     defaults = group.default_factory()
-    return [f.name for f in fields(defaults) if isinstance(getattr(defaults, f.name), bool)]
+    return [f.name for f in fields(defaults) if getattr(defaults, f.name) is default]
 
 
 def ablation_cells(setting: str) -> List[Cell]:
@@ -195,6 +201,14 @@ def ablation_cells(setting: str) -> List[Cell]:
     return [default_cell(setting, f'without {name}',
                          overrides=((f'{ADDITIONS_GROUP}.{name}', False),))
             for name in addition_names()]
+
+
+def persistent_ablation_cells(setting: str) -> List[Cell]:
+    """Return the persistent profile with each of its own additions off alone (docstring)."""
+    return [default_cell(setting, f'{PERSISTENT_LABEL} without {name}',
+                         profile=PERSISTENT_PROFILE,
+                         overrides=((f'{ADDITIONS_GROUP}.{name}', False),))
+            for name in addition_names(default=False)]
 
 
 def sweep_cells() -> List[Cell]:
@@ -213,8 +227,8 @@ FACTORIAL_RANGES = (0.0, 25.0, 50.0, UNLIMITED)
 FACTORIAL_POLICIES = ((REFERENCE_LABEL, 'sat', 'greedy'), ('SAT-PHD + OR-Tools', 'sat', 'ortools'),
                       ('lawnmower', 'lawnmower', 'greedy'),
                       ('random walk', 'random_walk', 'greedy'),
-                      ('PHD-Voronoi', FUTURE_POLICIES[0], 'greedy'),
-                      ('Thompson-sampling PHD', FUTURE_POLICIES[1], 'greedy'))
+                      ('PHD-Voronoi', FIELD_BASELINES[0], 'greedy'),
+                      ('Thompson-sampling PHD', FIELD_BASELINES[1], 'greedy'))
 
 
 def factorial_cells() -> List[Cell]:
@@ -240,7 +254,7 @@ def _designs() -> Dict[str, List[Cell]]:
             + policy_cells('random') if c.planner != 'ortools']
     full = (policy_cells('paper') + ablation_cells('paper') + policy_cells('paper_random')
             + ablation_cells('paper_random') + policy_cells('random') + ablation_cells('random')
-            + sweep_cells())
+            + persistent_ablation_cells('random') + sweep_cells())
     return {'default': paper + fits, 'full': _unique(full), 'factorial': factorial_cells()}
 
 

@@ -104,7 +104,8 @@ class TeamPhd:
 
     def __init__(self, params: SatParams):
         self.params = params
-        self.own = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing))
+        self.own = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing),
+                                 params)
         self._last: Optional[Tuple[int, np.ndarray]] = None
 
     def look(self, step: int, pose) -> None:
@@ -112,11 +113,10 @@ class TeamPhd:
         pose = np.asarray(pose, dtype=float)
         if self._last is not None and self._last[0] == step:
             return
-        sensor, decay = self.params.sensor, self.params.search.decay
         if self._last is not None:
             self.own.values = self.own.predicted(self.own.values, self._last[1],
-                                                 step - self._last[0], sensor, decay)
-        self.own.correct(pose, sensor)
+                                                 step - self._last[0])
+        self.own.correct(pose)
         self._last = (int(step), pose.copy())
 
     def points(self, pose, view: BaselineView) -> Tuple[np.ndarray, np.ndarray]:

@@ -28,8 +28,12 @@ class Claims:
 
     def unclaimed(self, nodes: np.ndarray) -> np.ndarray:
         """Return the unclaimed nodes; all of them (claims forgotten) if every one is claimed."""
-        free = np.setdiff1d(nodes, self._nodes)
-        if not free.size:
+        free = self.free(nodes)
+        if free is nodes:
             self._nodes = np.zeros(0, dtype=np.int64)
-            return nodes
         return free
+
+    def free(self, nodes: np.ndarray) -> np.ndarray:
+        """Return the unclaimed nodes, or all of them if every one is claimed (no change)."""
+        free = np.setdiff1d(nodes, self._nodes)
+        return free if free.size else nodes

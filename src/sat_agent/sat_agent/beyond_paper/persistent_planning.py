@@ -1,0 +1,111 @@
+"""Addition: search planning that keeps searching, on the nodes' worth, over the whole mission.
+
+Paper: the walks visit V-bar = {v: p_search(r_v) <= beta} by path-cheapest-arc (Section
+"Multi-agent Searching"); a plan is remade when it is exhausted, at first contact with a
+searching agent or when a member leaves SEARCH (search_planning.SearchPlanner). With a density
+that regrows (beyond_paper/regrowing_density.py) an absolute beta has no fixed meaning: the
+values are probabilities near 1 that regrow at the birth rate, and the paper's V-bar is empty
+for hundreds of steps after a sweep.
+Addition (``PersistentPlanner``):
+
+- worth of a node: the expected number of undetected targets in its region r_v, the sum of
+  u = -ln v over its cells (SearchDensity.node_worth). It is what a visit can find; it grows
+  back after a visit as the density regrows. With the paper's density (J constant) it is the
+  cells' ages times -ln J, and a never-searched cell counts ~708: such nodes come first.
+- every node is a candidate at every plan (no threshold, so no "V-bar empty" and no
+  fallback: additions.revisit_fallback has nothing left to do), except, in a replan made
+  alone, the nodes in view;
+- walks collect worth per distance: each walk grows (in turn, as joint plans do) by the free
+  node with the highest worth / distance from its head (search_planning._grow_walks with
+  worth; equal worth: the nearest, the paper's cheapest arc). This is the ratio greedy of the
+  orienteering problem: a node twice as worth may be twice as far;
+- replans follow the density over the whole mission: besides the paper's events, every agent
+  in SEARCH replans at the steps k that are multiples of ``search.replan_period``
+  (ReplanReason.PERIODIC). All agents see the same k, so the searching agents in range replan
+  jointly at the same step from the same k-1 reports (agent_core) and compute the same node
+  partition, as at first contact; in between a walk's value decays as the density regrows
+  elsewhere and others search its nodes;
+- a node of the walk that another agent searched meanwhile (with additions.
+  drop_searched_nodes) is one whose fused worth fell below DROPPED_SHARE of its worth when
+  the walk was planned.
+
+Why: targets are born all through the mission; a swarm that sweeps once never looks again
+where later targets appear, and one that plans on an absolute threshold either holds or
+revisits without telling which node pays most.
+Switch: ``additions.persistent_planning`` (off: search_planning.SearchPlanner).
+"""
+
+import numpy as np
+
+from sat_agent.config import SatParams
+from sat_agent.search_density import SearchDensity
+from sat_agent.search_map import nodes_in_view, SearchMap
+from sat_agent.search_planning import _costs, MIN_COST, own_visits_only, SearchPlanner
+
+# A scan removes p_D = 99 % of the undetected mass it covers; a node whose worth fell below
+# half of its planned worth was mostly covered by someone's square since (its worth only
+# grows otherwise, up to the mass that dies or walks out).
+DROPPED_SHARE = 0.5
+# A walk has decayed when its next node pays (worth per metre from the pose) less than half of
+# what the best node out of view and unclaimed would: a new walk alone then pays twice as much.
+DECAYED_SHARE = 0.5
+
+
+def every_node(node_worth: np.ndarray) -> np.ndarray:
+    """Return every node index: each has worth to collect (module docstring)."""
+    return np.arange(np.asarray(node_worth).size)
+
+
+def worth_dropped(worth: np.ndarray, planned, beta: float = 0.0) -> np.ndarray:
+    """Bool mask of the walk's nodes someone searched since planning (module docstring).
+
+    planned: their worth when the walk was planned (None: unknown, then none is dropped);
+    beta is not used (no threshold).
+    """
+    if planned is None:
+        return np.zeros(np.shape(worth), dtype=bool)
+    return worth < DROPPED_SHARE * np.asarray(planned, dtype=float)
+
+
+class PersistentPlanner(SearchPlanner):
+    """SearchPlanner on node worth, over every node, replanned periodically (module docstring)."""
+
+    def __init__(self, search_map: SearchMap, params: SatParams):
+        super().__init__(search_map, params)
+        self._latest = (None, None)
+        self._period = int(params.search.replan_period)
+        self._nodes_to_search = every_node
+        self._searched_meanwhile = (worth_dropped if params.additions.drop_searched_nodes
+                                    else own_visits_only)
+
+    def node_values(self, density: SearchDensity) -> np.ndarray:
+        """Each node's worth: the expected undetected targets in its region."""
+        return density.node_worth(self._map.centers, self._map.spacing)
+
+    def mark_visited(self, pose, node_values=None) -> np.ndarray:
+        """SearchPlanner.mark_visited; remembers pose and worth for the decay test."""
+        self._latest = (np.asarray(pose, dtype=float), node_values)
+        return super().mark_visited(pose, node_values)
+
+    def _periodic(self, step: int, group: frozenset) -> bool:
+        return step % self._period == 0 and len(group) > 1
+
+    def _decayed(self) -> bool:
+        """Whether the next node pays less than DECAYED_SHARE of the best rate (docstring)."""
+        pose, worth = self._latest
+        if worth is None or not self._walk.size:
+            return False
+        worth = np.asarray(worth, dtype=float).reshape(-1)
+        in_view = nodes_in_view(self._map, pose, self._params.sensor.square_side)
+        nodes = self._claims.free(np.setdiff1d(every_node(worth), in_view))
+        rates = worth[nodes] / np.maximum(_costs(pose, self._map.centers[nodes]), MIN_COST)
+        next_node = self._walk[:1]
+        rate = worth[next_node] / np.maximum(_costs(pose, self._map.centers[next_node]),
+                                             MIN_COST)
+        return bool(rate[0] < DECAYED_SHARE * rates.max(initial=0.0))
+
+    def _nodes_out_of_view(self, node_values: np.ndarray, in_view: np.ndarray) -> np.ndarray:
+        return np.setdiff1d(every_node(node_values), in_view)
+
+    def _walk_worth(self, node_values: np.ndarray) -> np.ndarray:
+        return node_values

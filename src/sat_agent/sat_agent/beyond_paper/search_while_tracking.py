@@ -1,0 +1,52 @@
+"""Addition: a tracking agent also covers search worth, within a bounded loss of information.
+
+Paper: u_k* = argmax of xi_track (Eqn. track_control, the Renyi divergence of the pseudo
+update) over the admissible actions (Section "Multi-agent Tracking", b); a tracking agent does
+not search (tracking_control.best_score).
+Addition: Eqn. track_control stays the first objective. Among the candidate actions (those the
+tracking control would choose from: the stand-off ones with additions.track_standoff) scoring
+at least (1 - epsilon) of the best score, epsilon = ``cooperation.track_search_tolerance``,
+the agent takes the one whose next sensing square holds the most search worth: the expected
+undetected targets sum_c u_c over the cells of S_a(pose) of the search density predicted to
+k+1 (u = -ln v, beyond_paper/regrowing_density.py; SearchDensity.square_worth). Ties go to the
+higher score, then the lower action index.
+Bound: the chosen action's score is >= (1 - epsilon) max score, so at most epsilon of the
+information the best action would gain at this step is given up. How confidently the targets
+are localised enters through the scores: while a target's cloud is wide, the actions centring
+it score far above the others and only they pass the bound; once it is tight, many actions
+keep it in view at similar scores and the agent picks among them the one that sweeps fresh
+ground. When no action is informative (every score 0, e.g. the targets left every square) all
+candidates pass and the agent searches.
+Why: an agent that tracks stops searching; with more targets than agents targets born near a
+tracked one would otherwise be found only by the searchers.
+Switch: ``additions.search_while_tracking`` (off: tracking_control.best_score).
+"""
+
+from typing import Optional
+
+import numpy as np
+
+from sat_agent.search_density import SearchDensity
+
+
+class SearchWhileTracking:
+    """Chooses the tracking action with the most search worth within the bound (docstring)."""
+
+    def __init__(self, tolerance: float):
+        self.tolerance = float(tolerance)
+
+    def __call__(self, scores: np.ndarray, candidates: np.ndarray, poses: np.ndarray,
+                 search: Optional[SearchDensity]) -> int:
+        """Return the action index; scores (U,), candidates bool (U,), poses (U, 2).
+
+        Without a search density (search None) it is the best score's action.
+        """
+        best = np.max(np.where(candidates, scores, -np.inf))
+        near = candidates & (scores >= (1.0 - self.tolerance) * best)
+        if search is None:
+            near = candidates & (scores == best)
+        worth = np.zeros(len(poses)) if search is None else search.square_worth(poses)
+        # lexsort: last key first; argmax of (worth, score) among the near actions, ties to
+        # the lowest index.
+        order = np.lexsort((-scores, -np.where(near, worth, -np.inf)))
+        return int(order[0])

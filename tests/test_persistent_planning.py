@@ -1,0 +1,121 @@
+"""Persistent planning (beyond_paper/persistent_planning.py): worth per distance, replans."""
+
+import numpy as np
+
+from sat_agent.actions import candidate_poses
+from sat_agent.agent_core import Agent
+from sat_agent.beyond_paper.persistent_planning import PersistentPlanner, worth_dropped
+from sat_agent.config import AreaParams, load_params_file
+from sat_agent.search_map import nodes_in_view, SearchMap
+from sat_agent.search_planning import greedy_closed_walk, joint_plan, ReplanReason, SearchPlanner
+
+PERSISTENT = load_params_file('config/persistent.yaml')
+MAP = SearchMap.for_area(AreaParams(), 10.0)
+
+
+def test_walks_take_the_most_worth_per_metre_and_the_nearest_among_equals():
+    centers = np.array([[10.0, 0.0], [30.0, 0.0], [-20.0, 0.0]])
+    # From the origin: 1 / 10 m < 4 / 30 m, so the far node first; then from (30, 0) the
+    # node at 20 m (worth 1, 0.05 / m) before the one at 50 m (worth 2, 0.04 / m).
+    worth = np.array([1.0, 4.0, 2.0])
+    assert joint_plan({1: (0.0, 0.0)}, centers, [0, 1, 2], worth)[1] == [1, 0, 2]
+    # Equal worth: the paper's path-cheapest-arc.
+    equal = np.ones(3)
+    assert (joint_plan({1: (0.0, 0.0)}, centers, [0, 1, 2], equal)[1]
+            == greedy_closed_walk((0.0, 0.0), centers, [0, 1, 2]))
+
+
+def test_a_joint_plan_on_worth_partitions_every_node_alike_on_both_agents():
+    rng = np.random.default_rng(4)
+    worth = rng.random(MAP.size)
+    starts = {1: (10.0, 60.0), 2: (60.0, 10.0)}
+    plans = [joint_plan(dict(reversed(starts.items())), MAP.centers, range(MAP.size), worth),
+             joint_plan(starts, MAP.centers, range(MAP.size)[::-1], worth)]
+    assert plans[0] == plans[1]
+    assert sorted(plans[0][1] + plans[0][2]) == list(range(MAP.size))
+
+
+def _planned(params=PERSISTENT, worth=None):
+    planner = PersistentPlanner(MAP, params)
+    assert planner.needs_replan(frozenset({1}), False, step=1) == ReplanReason.NO_PLAN
+    planner.plan(1, {1: (10.0, 60.0)}, np.ones(MAP.size) if worth is None else worth)
+    return planner
+
+
+def test_every_node_is_planned_and_joint_plans_are_remade_every_replan_period():
+    planner = _planned()
+    assert sorted(planner.walk) == list(range(MAP.size))      # no threshold, no fallback
+    period = PERSISTENT.search.replan_period
+    steps = range(2, 3 * period)
+    # Alone, the agent keeps its walk (replanning it from wherever it is leaves stragglers).
+    assert not any(planner.needs_replan(frozenset({1}), False, step=k) for k in steps)
+    planner.plan(1, {1: (10.0, 60.0), 2: (60.0, 10.0)}, np.ones(MAP.size))
+    reasons = [planner.needs_replan(frozenset({1, 2}), False, step=k) for k in steps]
+    assert [k for k, r in zip(steps, reasons) if r] == [period, 2 * period]
+    assert set(reasons) == {ReplanReason.NONE, ReplanReason.PERIODIC}
+    # The paper's planner (the switch off) never replans on the clock.
+    off = PERSISTENT.with_overrides({'additions.persistent_planning': False})
+    paper = SearchPlanner(MAP, off)
+    paper.needs_replan(frozenset({1}), False, step=1)
+    paper.plan(1, {1: (10.0, 60.0)}, np.zeros(MAP.size))
+    paper.plan(1, {1: (10.0, 60.0), 2: (60.0, 10.0)}, np.zeros(MAP.size))
+    assert not any(paper.needs_replan(frozenset({1, 2}), False, step=k) for k in steps)
+
+
+def test_a_node_whose_worth_fell_by_half_was_searched_by_someone_else():
+    worth = np.full(MAP.size, 2e-4)
+    planner = _planned(worth=worth)
+    now = worth * 1.01                       # regrown a little
+    now[[50, 51]] = 0.9e-4                   # someone's square covered most of them
+    dropped = planner.mark_visited((-50.0, -50.0), now)
+    assert sorted(dropped.tolist()) == [50, 51]
+    np.testing.assert_array_equal(worth_dropped(now, None), np.zeros(MAP.size, dtype=bool))
+    off = PERSISTENT.with_overrides({'additions.drop_searched_nodes': False})
+    assert _planned(off, worth).mark_visited((-50.0, -50.0), now).size == 0
+
+
+def test_a_walk_whose_next_node_pays_less_than_half_the_best_rate_is_replanned_alone():
+    worth = np.ones(MAP.size)
+    planner = _planned(worth=worth)
+    pose = np.array([10.0, 60.0])              # the start: the walk's next node is the nearest
+    planner.mark_visited(pose, worth)
+    assert planner.needs_replan(frozenset({1}), False, step=3) == ReplanReason.NONE
+    # Worth regrew tenfold everywhere but at its next node (not searched by others: kept).
+    decayed = 10.0 * worth
+    decayed[planner.walk[0]] = 1.0
+    planner.mark_visited(pose, decayed)
+    assert planner.needs_replan(frozenset({1}), False, step=3) == ReplanReason.DECAYED
+    first = planner.walk[0]
+    planner.plan(1, {1: pose}, decayed)
+    assert planner.walk[0] != first
+
+
+def _revisit_gaps(params, steps: int, start=(10.0, 60.0)) -> np.ndarray:
+    """Return the steps between consecutive views of each node by a lone agent, no target."""
+    agent = Agent(1, params, start, seed=0)
+    pose = np.array(start)
+    last = np.zeros(MAP.size)
+    gaps = np.zeros(MAP.size)
+    for k in range(1, steps + 1):
+        out = agent.step(k, pose, np.zeros((0, 2)), [])
+        seen = nodes_in_view(MAP, pose, params.sensor.square_side)
+        gaps[seen] = np.maximum(gaps[seen], k - last[seen])
+        last[seen] = k
+        pose = candidate_poses(pose, params.actions)[out.action]
+    return np.maximum(gaps, steps + 1 - last)
+
+
+def test_a_lone_agent_with_no_target_revisits_every_node_within_two_sweeps():
+    # The derivation: one step after a visit a node's worth is >= its cells' births b > 0
+    # (beyond_paper/regrowing_density.py), so every plan holds every node out of view. A lone
+    # agent replans when its walk is exhausted, so a node is seen again at the latest by the
+    # end of the next walk; a walk through the |V| nodes, one spacing s apart, flown at the
+    # top speed v = N_R Delta_R, takes |V| s / v steps (250 here): horizon 2 |V| s / v.
+    params = PERSISTENT
+    speed = params.actions.n_radial * params.actions.radial_step
+    sweep = MAP.size * MAP.spacing / speed
+    assert np.max(_revisit_gaps(params, int(3 * sweep))) <= 2 * sweep
+    # The paper's density and planner (config/paper.yaml) sweep once, then wait for J to
+    # bring nodes below beta (or revisit the least searched half): some wait far longer.
+    paper = load_params_file('config/paper.yaml')
+    assert np.max(_revisit_gaps(paper, int(3 * sweep))) > 2 * sweep
