@@ -55,12 +55,17 @@ class Hostile:
             self._publishers[key] = self.node.create_publisher(msg_type, topic, qos)
         return self._publishers[key].get_subscription_count() > 0
 
-    def capture(self, topic: str, msg_type, qos=RELIABLE, callback=None):
-        """Keep every raw message of topic in captured[topic]; callback(data) on each."""
+    def capture(self, topic: str, msg_type, qos=RELIABLE, callback=None, keep=None):
+        """Keep the raw messages of topic (those keep(data) accepts) in captured[topic].
+
+        callback(data) runs on each. The test's node also receives its own forgeries: keep
+        filters them out where a capture is replayed.
+        """
         self.captured[topic] = []
 
         def on_data(data):
-            self.captured[topic].append(bytes(data))
+            if keep is None or keep(data):
+                self.captured[topic].append(bytes(data))
             if callback is not None:
                 callback(data)
         return self.node.create_subscription(msg_type, topic, on_data, qos, raw=True)
@@ -76,6 +81,10 @@ class Diagnostics:
     def _on(self, msg):
         for status in msg.status:
             self.values[status.name.split(':')[0]] = {v.key: v.value for v in status.values}
+
+    def final(self, *nodes: str) -> bool:
+        """Whether each node has published its last counters (InputGuard.publish_final)."""
+        return all(self.values.get(node, {}).get('final') == '1' for node in nodes)
 
     def dropped(self, node: str, reason: str) -> int:
         """Messages node (e.g. '/world_sim', '/agent_1/agent') dropped for reason so far."""
@@ -115,12 +124,13 @@ def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[
 
 
 def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_file: Path,
-                 targets, watch, observers=('metrics',)) -> Dict[str, int]:
+                 targets, watch, diagnostics: 'Diagnostics', final_from,
+                 observers=('metrics',)) -> Dict[str, int]:
     """Run signed_swarm to its end under attack; return each process's exit code.
 
     targets: (topic, type, qos) of every attack's writer, matched before the run starts;
-    watch(processes): the test's subscriptions (its captures, which time the attacks).
-    Diagnostics come every 0.1 s, so the last counters are seen before the nodes exit.
+    watch(processes): the test's subscriptions (its captures, which time the attacks);
+    final_from: the nodes whose last counters (InputGuard.publish_final) the test reads.
     """
     with signed_swarm(tmp_path, scenario, steps, key_file, observers=observers,
                       extra=('-p', 'diagnostics_period:=0.1')) as processes:
@@ -130,6 +140,8 @@ def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_
         announce(node, watched)
         spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 240,
                    'the attacked run ended', processes.values())
+        spin_until(node, lambda: diagnostics.final(*final_from), 30,
+                   f'the final counters of {", ".join(final_from)} on /diagnostics')
         return {name: p.poll() for name, p in processes.items()}
 
 

@@ -158,7 +158,7 @@ def attacked(tmp_path_factory):
                                     lambda data: attacker.on_agent_2('/agent_2/status',
                                                                      AgentStatus, data))]
         codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch,
-                             OBSERVERS)
+                             diagnostics, ('/logger', '/recorder'), OBSERVERS)
         attacker = attackers[0]
     return read_metrics(tmp_path), inprocess_metrics(scenario), attacker, diagnostics, codes
 

@@ -107,7 +107,8 @@ def attacked(tmp_path_factory):
             return [hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
                                     lambda data: genuine_scan(data, key)
                                     and attack(hostile, sent, scan_step(data), key)),
-                    hostile.capture('/agent_1/cmd', ControlCommand),
+                    hostile.capture('/agent_1/cmd', ControlCommand,
+                                    keep=lambda data: genuine(data, key, '/agent_1/cmd', 1)),
                     hostile.capture(radio_topic(2, 'out', 'mode'), AgentMode),
                     hostile.capture(radio_topic(1, 'in', 'mode'), AgentMode),
                     hostile.capture('/world/step', WorldStep, LATCHED)]
@@ -116,7 +117,8 @@ def attacked(tmp_path_factory):
                    ('/agent_1/measurements', MeasurementSet, RELIABLE),
                    (radio_topic(1, 'in', 'mode'), AgentMode, RELIABLE),
                    ('/world/step', WorldStep, LATCHED)]
-        codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch)
+        codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch,
+                             diagnostics, (WORLD, AGENT_1, '/agent_2/agent'))
     assert codes == dict.fromkeys(codes, 0), codes
     return read_metrics(tmp_path), inprocess_metrics(scenario), sent, diagnostics
 
@@ -125,15 +127,20 @@ def scan_step(data):
     return deserialize_message(data, MeasurementSet).step
 
 
-def genuine_scan(data, key) -> bool:
-    """Whether a scan is world_sim's (the test's node also receives its own forgeries)."""
-    anything = StepWindow(2 ** 32, 2 ** 32, 2 ** 32)
+def genuine(data, key, topic: str, sender: int) -> bool:
+    """Whether data is signed by sender (the test's node also receives its own forgeries)."""
+    verifier = MessageVerifier(key, None, StepWindow(2 ** 32, 2 ** 32, 2 ** 32))
+    verifier.step = 2 ** 31    # any step: only the signature is asked about
     try:
-        MessageVerifier(key, None, anything).verify('/agent_1/measurements', data,
-                                                    sender=WORLD_SENDER)
+        verifier.verify(topic, data, sender=sender)
     except AuthError:
         return False
     return True
+
+
+def genuine_scan(data, key) -> bool:
+    """Whether a scan of agent 1 is world_sim's."""
+    return genuine(data, key, '/agent_1/measurements', WORLD_SENDER)
 
 
 def without_dropped(metrics):

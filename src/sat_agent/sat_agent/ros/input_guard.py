@@ -2,7 +2,9 @@
 
 A counter per reason, rate-limited warnings, and the counters published on ``/diagnostics``
 (diagnostic_msgs/DiagnosticArray) every ``diagnostics_period`` seconds (a node parameter,
-sat_agent.node_params.SteppingParams).
+sat_agent.node_params.SteppingParams), and once more when the node ends (``final`` = 1, sent by
+node_runner.run_nodes and awaited until acknowledged): counts of a node's last moments are not
+lost between its last period and its exit.
 """
 
 from collections import Counter
@@ -10,10 +12,13 @@ import math
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.duration import Duration
 
 from sat_agent.ros.node_runner import steady_timer
 
 LOG_THROTTLE_S = 5.0
+# Upper bound on waiting for the readers' acknowledgement of the final counters at exit.
+FINAL_DIAGNOSTICS_ACK_S = 2.0
 
 
 class InputGuard:
@@ -31,6 +36,8 @@ class InputGuard:
         self.auth = None
         self._publisher = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         steady_timer(node, period, self.publish)
+        # run_nodes publishes every guard's final counters before it destroys the node.
+        node.sat_guards = [*getattr(node, 'sat_guards', ()), self]
 
     def accept(self, kind: str):
         """Count one valid message of this kind."""
@@ -53,7 +60,7 @@ class InputGuard:
         since = f' ({unreported} more since the last warning)' if unreported else ''
         self._node.get_logger().warning(f'dropped ({reason}): {detail}{since}')
 
-    def status(self) -> DiagnosticStatus:
+    def status(self, final: bool = False) -> DiagnosticStatus:
         """Return the counters as one DiagnosticStatus (WARN while new drops keep coming)."""
         total = sum(self.dropped.values())
         level = DiagnosticStatus.WARN if total > self._reported else DiagnosticStatus.OK
@@ -63,6 +70,8 @@ class InputGuard:
         values += [KeyValue(key=f'dropped.{k}', value=str(n))
                    for k, n in sorted(self.dropped.items())]
         message = f'{total} message(s) dropped'
+        if final:
+            values.append(KeyValue(key='final', value='1'))
         if self.auth is not None:
             values.append(KeyValue(key='authenticated', value=str(int(self.auth == 'on'))))
             if self.auth == 'off':
@@ -72,9 +81,14 @@ class InputGuard:
         return DiagnosticStatus(level=level, name=name, hardware_id=self._hardware_id,
                                 message=message, values=values)
 
-    def publish(self):
-        """Publish the counters on /diagnostics."""
-        array = DiagnosticArray(status=[self.status()])
+    def publish(self, final: bool = False):
+        """Publish the counters on /diagnostics (final: the node's last ones)."""
+        array = DiagnosticArray(status=[self.status(final)])
         # The node's clock: sim time (the last /clock) under use_sim_time.
         array.header.stamp = self._node.get_clock().now().to_msg()
         self._publisher.publish(array)
+
+    def publish_final(self):
+        """Publish the last counters and wait, bounded, until every reader acknowledged them."""
+        self.publish(final=True)
+        self._publisher.wait_for_all_acked(Duration(seconds=FINAL_DIAGNOSTICS_ACK_S))

@@ -104,6 +104,9 @@ def run_nodes(name: str, factory, args=None) -> int:
         pass
     finally:
         for node in nodes:
+            if rclpy.ok():
+                for guard in getattr(node, 'sat_guards', ()):
+                    guard.publish_final()
             node.destroy_node()
         rclpy.try_shutdown()
         for number, handler in previous.items():
