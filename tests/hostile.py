@@ -19,7 +19,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 from ros_harness import announce, executable, PARAMS, spin_until, started, write_scenario
 import yaml
 
-from sat_agent.message_auth import create_key_file, Signer
+from sat_agent.message_auth import create_key_file, load_key, Signer
 
 DEPTH = 300
 RELIABLE = QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE)
@@ -148,6 +148,13 @@ def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_
 def new_key(tmp_path: Path) -> Path:
     """Return a fresh key file (0600) for one test's swarm."""
     return create_key_file(tmp_path / 'swarm.key')
+
+
+def attack_setup(tmp_path_factory, name: str, seed: int, steps: int):
+    """Return (tmp_path, scenario, key_file, key) of one attacked run (near_scenario)."""
+    tmp_path = tmp_path_factory.mktemp(name)
+    key_file = new_key(tmp_path)
+    return tmp_path, near_scenario(tmp_path, seed, steps), key_file, load_key(key_file)
 
 
 def near_scenario(tmp_path: Path, seed: int, steps: int) -> Path:

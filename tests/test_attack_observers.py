@@ -15,7 +15,7 @@ import os
 import zlib
 
 from geometry_msgs.msg import Point
-from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
+from hostile import (attack_setup, Diagnostics, forge, Hostile, LATCHED,
                      read_metrics, RELIABLE, run_attacked)
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
@@ -23,7 +23,7 @@ from ros_harness import ros_node
 from test_attack_swarm import genuine_scan, scan_step, without_dropped
 from test_swarm_ros import inprocess_metrics
 
-from sat_agent.message_auth import load_key, MonotonicCounter, Signer, WORLD_SENDER
+from sat_agent.message_auth import MonotonicCounter, Signer, WORLD_SENDER
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import (AgentStatus, GridInfo, GroundTruth, MeasurementSet, SearchDensity,
                           TargetTruth, WorldStep)
@@ -131,10 +131,7 @@ class Attacker:
 @pytest.fixture(scope='module')
 def attacked(tmp_path_factory):
     """Run the attacked swarm; return (metrics, expected, attacker, diagnostics, codes)."""
-    tmp_path = tmp_path_factory.mktemp('observers')
-    scenario = near_scenario(tmp_path, 4, STEPS)
-    key_file = new_key(tmp_path)
-    key = load_key(key_file)
+    tmp_path, scenario, key_file, key = attack_setup(tmp_path_factory, 'observers', 4, STEPS)
     with ros_node('hostile') as node:
         hostile = Hostile(node)
         diagnostics = Diagnostics(node)

@@ -14,14 +14,14 @@ metrics equal the in-process swarm's for the same scenario and seed.
 from collections import Counter
 
 from geometry_msgs.msg import Point
-from hostile import (Diagnostics, forge, Hostile, LATCHED, near_scenario, new_key,
+from hostile import (attack_setup, Diagnostics, forge, Hostile, LATCHED,
                      read_metrics, RELIABLE, run_attacked)
 import pytest
 from rclpy.serialization import deserialize_message
 from ros_harness import ros_node
 from test_swarm_ros import inprocess_metrics
 
-from sat_agent.message_auth import (AuthError, load_key, MessageVerifier, Signer, StepWindow,
+from sat_agent.message_auth import (AuthError, MessageVerifier, Signer, StepWindow,
                                     WORLD_SENDER)
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import AgentMode, ControlCommand, MeasurementSet, RangeBearing, WorldStep
@@ -94,10 +94,7 @@ def attack(hostile, sent, k, key):
 @pytest.fixture(scope='module')
 def attacked(tmp_path_factory):
     """Run the attacked swarm once; return (metrics, expected metrics, sent, diagnostics)."""
-    tmp_path = tmp_path_factory.mktemp('attacked')
-    scenario = near_scenario(tmp_path, 3, STEPS)
-    key_file = new_key(tmp_path)
-    key = load_key(key_file)
+    tmp_path, scenario, key_file, key = attack_setup(tmp_path_factory, 'attacked', 3, STEPS)
     sent = Counter()
     with ros_node('hostile') as node:
         hostile = Hostile(node)
