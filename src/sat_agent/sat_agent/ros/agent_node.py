@@ -250,16 +250,12 @@ class AgentNode(Node):
         self._try_step()
 
     def on_radio(self, kind: str, channel: str, data: bytes):
-        signed = self.inputs.check(channel, data, self.limits.radio(kind),
-                                   origin=lambda sender: radio_topic(sender, 'out', kind))
-        if signed is False:
+        received = self.inputs.receive_report(
+            self.radio_parser, kind, channel, data, self.lattice, self.limits.radio(kind),
+            origin=lambda sender: radio_topic(sender, 'out', kind))
+        if received is None:
             return
-        msg, part = self.radio_parser.parse(kind, data, self.lattice)
-        if msg is None:
-            self.guard.drop(part.reason, f'{kind}: {part.detail}')
-            return
-        if not self.inputs.confirm(channel, signed, msg):
-            return
+        msg, part = received
         if msg.agent_id == self.agent_id:
             self.guard.drop('own_report', f'{kind} from this agent came back')
             return

@@ -110,6 +110,24 @@ class VerifiedInput:
             return None
         return msg if self.confirm(channel, signed, msg, names_sender) else None
 
+    def receive_report(self, parser, kind: str, channel: str, data: bytes, lattice,
+                       max_bytes: int, sender: Optional[int] = None, relayed: bool = False,
+                       origin: Optional[Callable[[int], str]] = None):
+        """Return (msg, part) of an agent's radio report if it passes, else None (counted).
+
+        As receive, with the radio's parser (radio_parsing.RadioParser: bounds, then decoding
+        shared across the agents of a process) in place of deserialize_message; part may be an
+        InvalidMessage the caller drops after its own step checks.
+        """
+        signed = self.check(channel, data, max_bytes, sender, relayed, origin)
+        if signed is False:
+            return None
+        msg, part = parser.parse(kind, data, lattice)
+        if msg is None:
+            self.guard.drop(part.reason, f'{channel}: {part.detail}')
+            return None
+        return (msg, part) if self.confirm(channel, signed, msg) else None
+
     def check(self, channel: str, data: bytes, max_bytes: int, sender: Optional[int] = None,
               relayed: bool = False, origin: Optional[Callable[[int], str]] = None):
         """Check size and signature; return the sender's Signed block (None without a key).

@@ -348,16 +348,13 @@ class WorldSimNode(Node):
     def on_report(self, agent_id: int, kind: str, data: bytes):
         """Validate an agent's report message and hand it to the radio (never forward garbage)."""
         channel = radio_topic(agent_id, 'out', kind)
-        signed = self.inputs.check(channel, data, self.limits.radio(kind), sender=agent_id,
-                                   relayed=True)
-        if signed is False:
+        received = self.inputs.receive_report(self.radio_parser, kind, channel, data,
+                                              self.lattice, self.limits.radio(kind),
+                                              sender=agent_id, relayed=True)
+        if received is None:
             return
-        msg, part = self.radio_parser.parse(kind, data, self.lattice)
-        if msg is None:
-            self.guard.drop(part.reason, f'{kind} of agent {agent_id}: {part.detail}')
-            return
-        if not self.inputs.confirm(channel, signed, msg) or \
-                not self._current(agent_id, msg, f'radio/out/{kind}'):
+        msg, part = received
+        if not self._current(agent_id, msg, f'radio/out/{kind}'):
             return
         if kind in self._reports[agent_id]:
             self.guard.drop('duplicate', f'second {kind} of agent {agent_id} at {msg.step}')
