@@ -7,7 +7,7 @@ import pytest
 from sat_agent.config import load_params_file, SatParams
 from sat_world_sim import study_design
 from sat_world_sim.evaluate import cost_model, estimate, main, METRIC_WORDS, METRICS
-from sat_world_sim.evaluate import QUICK_STEPS, README_MARKERS
+from sat_world_sim.evaluate import QUICK_STEPS, TABLE_MARKERS
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
@@ -175,7 +175,7 @@ ONLY = ['random/SAT-PHD (cooperative)', 'random/lawnmower', 'random/oracle sweep
 def test_quick_study_writes_rows_tables_readme_and_figures(tmp_path, capsys):
     out = tmp_path / 'eval'
     readme = tmp_path / 'README.md'
-    readme.write_text(f'# Title\n{README_MARKERS[0]}\nold table\n{README_MARKERS[1]}\nrest\n')
+    readme.write_text(f'# Title\n{TABLE_MARKERS[0]}\nold table\n{TABLE_MARKERS[1]}\nrest\n')
     args = ['--quick', '--seeds', '2', '--first-seed', '1001', '--jobs', '2', '--out', str(out),
             '--readme', str(readme), '--config', str(CONFIG), '--costs', str(tmp_path / 'no')]
     assert main(args + sum((['--only', name] for name in ONLY), [])) == 0
@@ -194,8 +194,8 @@ def test_quick_study_writes_rows_tables_readme_and_figures(tmp_path, capsys):
     tables = printed.out.strip()
     assert 'p < 0.01' in tables and '95 % CI' in tables
     assert tables.count('(ref.)') == 3 * 6   # three settings' references, six metrics each
-    assert readme.read_text() == (f'# Title\n{README_MARKERS[0]}\n{tables}\n'
-                                  f'{README_MARKERS[1]}\nrest\n')
+    assert readme.read_text() == (f'# Title\n{TABLE_MARKERS[0]}\n{tables}\n'
+                                  f'{TABLE_MARKERS[1]}\nrest\n')
     assert tables in (out / 'evaluation_summary.md').read_text()
     for name in ('evaluation_time.png', 'evaluation_detection.png'):
         assert (out / name).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'

@@ -1,9 +1,10 @@
 import numpy as np
 
-from sat_world_sim.evaluate import METRICS
+from sat_world_sim.evaluate import main, METRICS, TABLE_MARKERS, write_csv
 from sat_world_sim.evaluation_plots import write_figures
-from sat_world_sim.evaluation_tables import study_tables, table_cells
-from sat_world_sim.study_design import default_cell, ORACLE, ORACLE_LABEL, STRICT_LABEL
+from sat_world_sim.evaluation_tables import rivals_table, study_tables, table_cells
+from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE, ORACLE_LABEL
+from sat_world_sim.study_design import PERSISTENT_LABEL, rivals_of, STRICT_LABEL
 
 SEEDS = range(1, 21)
 REFERENCE = default_cell('random')
@@ -13,18 +14,23 @@ ABLATED = default_cell('random', 'without confirmation',
 LAWNMOWER = default_cell('random', 'lawnmower', policy='lawnmower')
 ORACLE_CELL = default_cell('random', ORACLE_LABEL, policy=ORACLE, planner='none')
 CELLS = [REFERENCE, STRICT, ABLATED, LAWNMOWER, ORACLE_CELL]
+PERSISTENT = default_cell('random', PERSISTENT_LABEL, profile='persistent')
+ELSEWHERE = default_cell('paper_random', 'lawnmower', policy='lawnmower')
 
 
 def detected(cell, seed):
     """Shares built so that the differences to the reference are known."""
     base = 0.3 + 0.02 * seed
     return {REFERENCE: base, STRICT: base - 0.2, ABLATED: base + (0.01 if seed % 2 else -0.01),
-            LAWNMOWER: base, ORACLE_CELL: 2 * base}[cell]
+            LAWNMOWER: base, ORACLE_CELL: 2 * base, PERSISTENT: base + 0.1,
+            ELSEWHERE: base}[cell]
 
 
 def result(cell, seed):
     row = dict(cell.columns(), seed=seed, **dict.fromkeys(METRICS, 1.0))
-    row.update(detected_share=detected(cell, seed), mean_ospa=5.0 + 0.1 * seed)
+    # The persistent profile's OSPA is 0.5 m lower on every seed but the lawnmower's is higher.
+    ospa = 5.0 + 0.1 * seed - 0.5 * (cell == PERSISTENT) + 0.5 * (cell == LAWNMOWER)
+    row.update(detected_share=detected(cell, seed), mean_ospa=ospa)
     return {'row': row, 'cell': cell, 'ospa': np.full(10, 5.0), 'searched': np.linspace(0, 50, 10),
             'targets': [{'time_to_detection': seed}]}
 
@@ -68,3 +74,43 @@ def test_figures_include_the_ablation_when_it_ran(tmp_path):
                                              'evaluation_detection.png', 'evaluation_time.png']
     for path in paths:
         assert path.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def test_the_persistent_profile_is_set_against_every_other_policy_of_its_setting():
+    # In the default design: every policy and profile at random but the oracle (a ceiling).
+    from sat_world_sim.study_design import DESIGNS
+    (persistent,) = [c for c in DESIGNS['default'] if c == PERSISTENT]
+    assert [c.label for c in rivals_of(persistent, DESIGNS['default'])] == [
+        'SAT-PHD (cooperative)', STRICT_LABEL, 'SAT-PHD, no radio', 'lawnmower', 'random walk',
+        'PHD-Voronoi', 'Thompson-sampling PHD']
+    cells = CELLS + [PERSISTENT, ELSEWHERE]
+    rows = [result(cell, seed)['row'] for cell in cells for seed in SEEDS]
+    table = rivals_table(cells, rows)
+    # Not the oracle, the ablation cell, itself nor another setting's cells.
+    assert [r.split(' | ')[1] for r in table.splitlines()[2:]] == [
+        'SAT-PHD (cooperative)', STRICT_LABEL, 'lawnmower']
+    # Its mean, then persistent minus it: +10 and +30 points, -0.5 and -1 m on every seed.
+    assert '| lawnmower | 20 | 51 | +10 [+10, +10]* | 6.55 | −1.00 [−1.00, −1.00]* |' in table
+    assert '| 31 | +30 [+30, +30]* | 6.05 | −0.50 [−0.50, −0.50]* |' in table
+    assert 'persistent − it' in study_tables(cells, rows)
+    assert rivals_table(CELLS, [r['row'] for r in RESULTS]) == ''
+
+
+def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, capsys):
+    out = tmp_path / 'eval'
+    out.mkdir()
+    assert main(['--tables-only', '--out', str(out)]) == 2
+    assert 'evaluation.csv' in capsys.readouterr().err
+    cells = CELLS + [PERSISTENT]
+    rows = [result(cell, seed)['row'] for cell in cells for seed in SEEDS]
+    write_csv(rows, out / 'evaluation.csv', CONFIG_COLUMNS + ('seed',) + METRICS)
+    stale = f'{TABLE_MARKERS[0]}\nold\n{TABLE_MARKERS[1]}'
+    (out / 'evaluation_summary.md').write_text(f'# Summary\n\n{stale}\n\n## Per cell\n')
+    readme = tmp_path / 'README.md'
+    readme.write_text(f'# Title\n{stale}\nrest\n')
+    assert main(['--tables-only', '--out', str(out), '--readme', str(readme)]) == 0
+    tables = study_tables(cells, rows)
+    assert capsys.readouterr().out.strip() == tables
+    fresh = f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}'
+    assert readme.read_text() == f'# Title\n{fresh}\nrest\n'
+    assert (out / 'evaluation_summary.md').read_text() == f'# Summary\n\n{fresh}\n\n## Per cell\n'

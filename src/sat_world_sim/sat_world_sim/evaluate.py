@@ -18,12 +18,13 @@ evaluation.csv; ``cost_model``).
 Outputs in ``--out`` (docs/ by default): evaluation.csv (one row per run: CONFIG_COLUMNS, seed,
 METRICS), evaluation_targets.csv (one row per target), evaluation_summary.md (every table and
 how the study was made) and the figures; ``--readme`` writes the README's tables between its
-markers.
+markers. ``--tables-only`` runs nothing: it writes the tables of ``--out``'s evaluation.csv
+again, into that summary and ``--readme`` (after a change to the tables, not to the runs).
 
     evaluate [--design default|full|factorial] [--only SETTING/LABEL ...] [--seeds 50]
              [--first-seed 1] [--jobs N] [--scheduler local|tcp://HOST:PORT] [--out docs]
              [--config config] [--readme README.md] [--quick | --steps N] [--costs CSV]
-             [--dry-run] [--list]
+             [--dry-run] [--list] [--tables-only]
 """
 
 import argparse
@@ -31,6 +32,7 @@ from collections import defaultdict
 from concurrent.futures import as_completed, ProcessPoolExecutor
 from contextlib import contextmanager, ExitStack
 import csv
+from dataclasses import replace
 import logging
 import multiprocessing
 import os
@@ -236,28 +238,50 @@ def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, table
         f'{len(rows)} runs in {seconds / 60:.1f} min on {os.cpu_count()} cores, made by '
         f'`{command}` (`make evaluate` regenerates the default study); one row per run in '
         'evaluation.csv, the design in `sat_world_sim/study_design.py`.\n\n'
-        f'{tables}\n\n## Mean ± std per cell\n\n{summary_table(cells, rows)}\n\n'
+        f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}\n\n'
+        f'## Mean ± std per cell\n\n{summary_table(cells, rows)}\n\n'
         f'## Cells skipped\n\n{skipped_text}\n'
         f'## Cost per run\n\n{cost_table(cells, rows)}\n', encoding='utf-8')
 
 
-README_MARKERS = ('<!-- evaluation table: start (written by evaluate --readme) -->',
-                  '<!-- evaluation table: end -->')
+# Around the tables in the README and in evaluation_summary.md.
+TABLE_MARKERS = ('<!-- evaluation table: start (written by evaluate --readme) -->',
+                 '<!-- evaluation table: end -->')
 
 
 def _readme_parts(path: Path) -> tuple:
-    """Split a README around its table: (text up to the start marker, text from the end one)."""
+    """Split a file around its tables: (text up to the start marker, text from the end one)."""
     text = path.read_text(encoding='utf-8')
-    start, end = (text.find(marker) for marker in README_MARKERS)
+    start, end = (text.find(marker) for marker in TABLE_MARKERS)
     if start < 0 or end < start:
-        raise ValueError(f'{path}: the markers {README_MARKERS} are missing (in this order)')
-    return text[:start + len(README_MARKERS[0])], text[end:]
+        raise ValueError(f'{path}: the markers {TABLE_MARKERS} are missing (in this order)')
+    return text[:start + len(TABLE_MARKERS[0])], text[end:]
 
 
 def update_readme(path: Path, tables: str) -> None:
-    """Replace the text between README_MARKERS in path, so the README shows the last study."""
+    """Replace the text between TABLE_MARKERS in path, so it shows the last study's tables."""
     head, tail = _readme_parts(path)
     path.write_text(f'{head}\n{tables}\n{tail}', encoding='utf-8')
+
+
+def cells_of(rows: Sequence[dict]) -> List[Cell]:
+    """Return the catalogue's cells that rows ran, in catalogue order, at the rows' length."""
+    ran = {(r['setting'], r['label']): int(r['steps']) for r in rows}
+    return [replace(cell, steps=ran[cell.setting, cell.label]) for cell in catalogue()
+            if (cell.setting, cell.label) in ran]
+
+
+def rewrite_tables(out: Path, readme: Optional[str]) -> str:
+    """Write the tables of out/evaluation.csv into its summary and the README (--tables-only)."""
+    from sat_world_sim.evaluation_tables import study_tables
+
+    rows = read_rows(out / 'evaluation.csv')
+    if not rows:
+        raise ValueError(f'{out / "evaluation.csv"}: no runs to tabulate')
+    tables = study_tables(cells_of(rows), rows)
+    for path in [out / 'evaluation_summary.md'] + ([Path(readme)] if readme else []):
+        update_readme(path, tables)
+    return tables
 
 
 # ---------------------------------------------------------------- command line
@@ -269,6 +293,9 @@ def _arguments(argv):
     parser.add_argument('--only', action='append', default=[], metavar='SETTING/LABEL',
                         help="run this cell only (repeatable; any design's cell)")
     parser.add_argument('--list', action='store_true', help='list every cell and exit')
+    parser.add_argument('--tables-only', action='store_true',
+                        help="run nothing: write the tables of --out's evaluation.csv again "
+                             'into its evaluation_summary.md and --readme')
     parser.add_argument('--dry-run', action='store_true',
                         help='print the run count and the wall-time estimate, run nothing')
     parser.add_argument('--seeds', type=int, default=SEEDS, help=f'seeds per cell ({SEEDS})')
@@ -318,6 +345,13 @@ def main(argv=None) -> int:
     if args.list:
         print('\n'.join(f'{cell.name}  [{", ".join(n for n, cs in DESIGNS.items() if cell in cs)}]'
                         for cell in catalogue()))
+        return 0
+    if args.tables_only:
+        try:
+            print(rewrite_tables(Path(args.out), args.readme))
+        except (ValueError, OSError) as error:
+            print(f'error: {error}', file=sys.stderr)
+            return 2
         return 0
     problems = [f'{name} = {value}: must be >= {low}' for name, value, low in (
         ('--seeds', args.seeds, 1), ('--jobs', args.jobs, 1), ('--first-seed', args.first_seed, 0),

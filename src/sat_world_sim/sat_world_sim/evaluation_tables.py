@@ -5,8 +5,11 @@
   reference (study_design.reference_of, cooperative SAT-PHD), "mean (Δ [95 % CI])" with a mark
   when the Wilcoxon signed-rank p < 0.01 (paired_statistics.py); optionally the detected share
   as a fraction of the oracle sweep's of the same setting and team, with its 95 % CI.
+- ``rivals_table``: the persistent profile (issue 15) against every other policy and profile
+  of its setting: each one's mean and persistent minus it, "Δ [95 % CI] mark".
 - ``study_tables``: the README's block: legend, the main table (policies and profiles), the
-  ablation (reference, strict, each addition off alone) and the sweeps when they ran.
+  persistent profile against its rivals, the ablation (reference, strict, each addition off
+  alone) and the sweeps when they ran.
 
 Tables, not claims: prose goes around them, written by people who read them.
 """
@@ -20,7 +23,8 @@ import numpy as np
 from sat_world_sim.paired_statistics import ALPHA, paired_difference, paired_values
 from sat_world_sim.paired_statistics import ratio_of_means
 from sat_world_sim.study_design import ADDITIONS_GROUP, ceiling_of, Cell, factorial_cells
-from sat_world_sim.study_design import is_setting_reference, reference_of, STRICT_PROFILE
+from sat_world_sim.study_design import is_persistent, is_setting_reference, reference_of
+from sat_world_sim.study_design import rivals_of, STRICT_PROFILE
 from sat_world_sim.study_design import sweep_cells
 
 MARK = '*'
@@ -43,6 +47,8 @@ MAIN = (('detected %', 'detected_share', 100.0, 0), ('entered %', 'entered_share
         ('tracked %', 'tracked_share', 100.0, 0),
         ('searched % k=100', 'searched_pct_100', 1.0, 0),
         ('false-track steps', 'false_track_steps', 1.0, 1))
+# The figures issue 15 asks the persistent profile to lead every baseline on.
+RIVALS = (('detected %', 'detected_share', 100.0, 0), ('OSPA (m)', 'mean_ospa', 1.0, 2))
 ABLATION = (('detected %', 'detected_share', 100.0, 0), ('OSPA (m)', 'mean_ospa', 1.0, 2),
             ('searched % k=100', 'searched_pct_100', 1.0, 0),
             ('false-track steps', 'false_track_steps', 1.0, 1))
@@ -103,6 +109,31 @@ def paired_table(cells: Sequence[Cell], rows: Sequence[dict], metrics=MAIN,
     return '\n'.join(lines)
 
 
+def rivals_table(cells: Sequence[Cell], rows: Sequence[dict], metrics=RIVALS) -> str:
+    """Return the persistent profile against each rival of its setting (study_design.rivals_of).
+
+    Per rival: its mean of each metric and persistent minus it, paired by seed, with the CI and
+    the mark; '' when no persistent cell ran.
+    """
+    data = by_seed(rows)
+    header = ['setting', 'against', 'N']
+    for name, *_ in metrics:
+        header += [name, f'persistent − it, {name}']
+    lines = _header(header)
+    for persistent in (c for c in cells if is_persistent(c)):
+        mine = data[persistent.name]
+        for rival in rivals_of(persistent, cells):
+            theirs = data[rival.name]
+            entries = [rival.setting, rival.label,
+                       str(len(paired_values(mine['seed'], theirs['seed'])[0]))]
+            for _, column, scale, decimals in metrics:
+                entries += [_mean_entry(theirs[column], scale, decimals),
+                            _difference_entry(mine[column], theirs[column], scale, decimals)
+                            or 'n/a']
+            lines.append(_line(entries))
+    return '\n'.join(lines) if len(lines) > 2 else ''
+
+
 def table_cells(cells: Sequence[Cell]) -> Dict[str, List[Cell]]:
     """Split the study's cells into the README's tables: main, ablation, sweeps, factorial.
 
@@ -125,6 +156,11 @@ def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
     """Return the README's block: legend, main table, ablation, sweeps (those that ran)."""
     parts = table_cells(cells)
     blocks = [LEGEND, '', paired_table(parts['main'], rows, MAIN, cells)]
+    rivals = rivals_table(parts['main'], rows)
+    if rivals:
+        blocks += ['', 'The persistent profile (config/persistent.yaml) against every other '
+                   'policy and profile of its setting (issue 15), paired by seed; the oracle '
+                   'sweep is its ceiling above.', '', rivals]
     if parts['ablation']:
         blocks += ['', 'Ablation: the default profile (config/paper.yaml) with each addition to '
                    'the paper switched off alone, and the strict profile '
@@ -147,13 +183,18 @@ def _mean_entry(values, scale: float, decimals: int) -> str:
 
 def _paired_entry(values, reference, scale: float, decimals: int) -> str:
     mean = _mean_entry(values, scale, decimals)
+    difference = _difference_entry(values, reference, scale, decimals)
+    return f'{mean} ({difference})' if difference else mean
+
+
+def _difference_entry(values, reference, scale: float, decimals: int) -> str:
+    """Return 'Δ [low, high]' and the mark, Δ = values - reference paired by seed ('' if none)."""
     difference = paired_difference(*paired_values(values, reference))
     if not math.isfinite(difference.low):
-        return mean
+        return ''
     mark = MARK if difference.significant else ''
     low, high = (_fmt(scale * v, decimals, sign=True) for v in (difference.low, difference.high))
-    return (f'{mean} ({_fmt(scale * difference.estimate, decimals, sign=True)} '
-            f'[{low}, {high}]{mark})')
+    return f'{_fmt(scale * difference.estimate, decimals, sign=True)} [{low}, {high}]{mark}'
 
 
 def _ratio_entry(values, ceiling) -> str:

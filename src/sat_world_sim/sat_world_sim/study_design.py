@@ -344,6 +344,24 @@ def ceiling_of(cell: Cell, cells: Sequence[Cell]) -> Optional[Cell]:
                  and c.agents == cell.agents), None)
 
 
+def is_persistent(cell: Cell) -> bool:
+    """Whether the cell is a setting's persistent profile (issue 15) at its default values."""
+    return replace(cell, steps=STEPS) == default_cell(cell.setting, PERSISTENT_LABEL,
+                                                      profile=PERSISTENT_PROFILE)
+
+
+def rivals_of(cell: Cell, cells: Sequence[Cell]) -> List[Cell]:
+    """Return what the persistent profile must lead (issue 15) among cells, in their order.
+
+    Every other policy and profile of the cell's setting (``policy_cells``: cooperative and
+    strict SAT-PHD, no radio, lawnmower, random walk, OR-Tools walks, PHD-Voronoi, Thompson
+    sampling), not the oracle sweep: a ceiling, not a policy (it sees the truth).
+    """
+    policies = [c for c in policy_cells(cell.setting)
+                if not c.is_oracle and c != replace(cell, steps=STEPS)]
+    return [c for c in cells if replace(c, steps=STEPS) in policies]
+
+
 def scenario_for(cell: Cell, seed: int, params: SatParams, paper: Scenario) -> Scenario:
     """Return the cell's scenario for one seed (module docstring); paper: the paper's one."""
     width, height = params.area.width, params.area.height
