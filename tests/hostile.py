@@ -46,7 +46,7 @@ class Hostile:
         self.publisher(topic, msg_type, qos).publish(data)
 
     def publisher(self, topic: str, msg_type, qos=RELIABLE):
-        """The test's writer of topic with qos (created on first call)."""
+        """Return the test's writer of topic with qos (created on first call)."""
         key = (topic, msg_type, qos.durability)
         if key not in self._publishers:
             self._publishers[key] = self.node.create_publisher(msg_type, topic, qos)
