@@ -153,7 +153,7 @@ def table_cells(cells: Sequence[Cell]) -> Dict[str, List[Cell]]:
 
 
 def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
-    """Return the README's block: legend, main table, ablation, sweeps (those that ran)."""
+    """Return the README's block: legend, main table, rivals, ablation, sweeps (those that ran)."""
     parts = table_cells(cells)
     blocks = [LEGEND, '', paired_table(parts['main'], rows, MAIN, cells)]
     rivals = rivals_table(parts['main'], rows)
