@@ -112,9 +112,12 @@ class Attacker:
             bomb = SearchDensity(agent_id=2, step=k,
                                  grid=GridInfo(resolution=1.0, width=NEVER, height=NEVER),
                                  values_zlib=array('B', ZLIB_BOMB))
-            # Counter just above agent 2's message of step 7, below its next one: the bomb never
-            # makes agent 2's next density a "replay". An observer that has that next one
-            # already refuses the bomb as replayed, else for its grid (counted as either).
+            # Counter just above agent 2's message of step 7, below its next one. Two writers,
+            # so DDS may deliver the bomb before or after that message: after, it is refused as
+            # replayed, before, for its grid (counted as either); refused, it never advances
+            # agent 2's counter (signed_io: only a message taken does), so no genuine density
+            # is refused as a replay (it was once, in a full run: world_sim then dropped agent
+            # 2's step-7 density and the run left the unattacked one).
             after = genuine.auth.counter + 1
             insider = Signer(self.key, 2, MonotonicCounter(lambda: after))
             self.hostile.send(topic, SearchDensity, insider.sign(

@@ -141,6 +141,45 @@ def test_a_refused_message_does_not_advance_the_replay_counter():
     assert v.verify('/agent_2/cmd', on_time).step == 11
 
 
+def test_a_message_refused_after_its_signature_leaves_the_replay_counter_where_it_was():
+    # An insider's signed message with a counter just above a genuine one arrives first (DDS
+    # does not order two writers) and its receiver refuses its content: it is never committed.
+    genuine = Signer(KEY, 2, MonotonicCounter(lambda: 100)).sign('/agent_2/cmd', payload(), 10)
+    insider = Signer(KEY, 2, MonotonicCounter(lambda: 101)).sign('/agent_2/cmd', payload(), 10)
+    v = verifier(10)
+    assert v.verify('/agent_2/cmd', insider, commit=False).counter == 101
+    assert v.verify('/agent_2/cmd', genuine, commit=False).counter == 100
+    v.commit('/agent_2/cmd')
+    assert v.accepted == {'/agent_2/cmd': 1}
+    refused(lambda: v.verify('/agent_2/cmd', genuine), 'replayed')
+    # Taken, a counter is a bound like any other; a commit without a pending message is a no-op.
+    v.verify('/agent_2/cmd', insider, commit=False)
+    v.commit('/agent_2/cmd')
+    v.commit('/agent_2/cmd')
+    refused(lambda: v.verify('/agent_2/cmd', insider), 'replayed')
+    assert v.accepted == {'/agent_2/cmd': 2} and v.refused == {'replayed': 2}
+
+
+def test_a_world_message_teaches_the_step_only_once_taken():
+    v = verifier(None)
+    v.verify('/world/step', Signer(KEY, WORLD_SENDER).sign('/world/step', payload(), 50),
+             commit=False)
+    assert v.step is None
+    v.commit('/world/step')
+    assert v.step == 50
+
+
+def test_a_delivery_refused_after_its_seal_leaves_the_inbox_counter_where_it_was():
+    relay = Signer(KEY, WORLD_SENDER, MonotonicCounter(lambda: 7))
+    report = Signer(KEY, 2).sign(outbox(2), payload(relayed=True), 10, relayed=True)
+    first = relay_to(1, report, relay=relay)
+    later = relay_to(1, report, relay=Signer(KEY, WORLD_SENDER, MonotonicCounter(lambda: 8)))
+    v = verifier(10)
+    v.verify_delivery(inbox(1), later, outbox, commit=False)
+    v.verify_delivery(inbox(1), first, outbox)
+    refused(lambda: v.verify_delivery(inbox(1), first, outbox), 'replayed')
+
+
 def test_a_respawned_sender_is_not_taken_for_a_replay():
     v = verifier(10)
     old = Signer(KEY, 2)

@@ -6,9 +6,11 @@ from rclpy.serialization import serialize_message
 
 from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.config import SatParams
-from sat_agent.message_auth import BLOCK_BYTES, Signer, WORLD_SENDER
+from sat_agent.message_auth import (BLOCK_BYTES, MonotonicCounter, Signer, StepWindow,
+                                    WORLD_SENDER)
 from sat_agent.ros.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
 from sat_agent.ros.radio_parsing import RadioParser
+from sat_agent.ros.signed_io import VerifiedInput
 
 PARAMS = SatParams()
 
@@ -82,3 +84,48 @@ def test_copies_that_differ_only_in_the_relays_seal_are_parsed_once(report_bytes
               for i in (1, 2)]
     assert sealed[0] != sealed[1]
     assert shared.parse('mode', sealed[0], lattice) is shared.parse('mode', sealed[1], lattice)
+
+
+class Guard:
+    """What VerifiedInput needs of a node's InputGuard: the reasons it drops."""
+
+    auth = None
+
+    def __init__(self):
+        self.reasons = []
+
+    def drop(self, reason, detail):
+        self.reasons.append(reason)
+
+
+def test_an_insiders_report_refused_for_its_content_does_not_block_the_genuine_one(
+        report_bytes):
+    # test_attack_observers' insider bomb, arriving before the genuine report it follows (two
+    # writers, so DDS does not order them): a density for another grid, signed by agent 1 with
+    # the counter just above the genuine one's. It is refused for its grid and must not count
+    # as taken, or the genuine report would then be refused as a replay (seen in a full run).
+    lattice, _, data = report_bytes
+    key, channel = bytes(range(32)), '/agent_1/radio/out/search_density'
+    other = Agent(1, SatParams().with_overrides({'search.lattice_spacing': 2.0}), (5.0, 5.0))
+    report = other.step(3, (5.0, 5.0), np.zeros((0, 2)), []).report
+    msgs = report_to_msgs(report, other.filter.search.lattice, PARAMS.motion.dt)
+    bomb = serialize_message(msgs[REPORT_KINDS.index('search_density')])
+
+    def signed(counter, body):
+        signer = Signer(key, 1, MonotonicCounter(lambda: counter))
+        return signer.sign(channel, body, 3, relayed=True)
+    genuine, insider = signed(100, data['search_density']), signed(101, bomb)
+    guard = Guard()
+    inputs = VerifiedInput(None, guard, key, (1, 2), StepWindow(behind=4, ahead=1, world_ahead=10))
+    inputs.verifier.step = 3
+    parser, limit = RadioParser(), 1 << 20
+    msg, part = inputs.receive_report(parser, 'search_density', channel, insider, lattice, limit,
+                                      relayed=True)
+    assert isinstance(part, InvalidMessage) and part.reason == 'grid_mismatch'
+    msg, part = inputs.receive_report(parser, 'search_density', channel, genuine, lattice, limit,
+                                      relayed=True)
+    assert msg.agent_id == 1 and not isinstance(part, InvalidMessage)
+    # Once the genuine report is taken, both are behind the counter.
+    assert inputs.receive_report(parser, 'search_density', channel, genuine, lattice, limit,
+                                 relayed=True) is None
+    assert guard.reasons == ['replayed']

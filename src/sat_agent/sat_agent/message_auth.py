@@ -287,6 +287,13 @@ class MessageVerifier:
     channel. ``key`` None: authentication off, every
     message is accepted (counted as ``unauthenticated``) and verify returns None. world_sim,
     which is the world, sets ``step`` itself at each step.
+
+    Only a message its receiver takes advances the replay counter and teaches the step. A
+    receiver that checks more after the signature (the content, as a decoder does) verifies with
+    ``commit=False`` and calls ``commit(channel)`` once it takes the message: a signed message
+    it refuses then leaves the counter where it was. Otherwise an insider's signed but invalid
+    message with a counter just above a genuine one, arriving first (DDS does not order two
+    writers), would have the genuine message refused as a replay.
     """
 
     def __init__(self, key: Optional[bytes], senders: Optional[Collection[int]],
@@ -300,41 +307,53 @@ class MessageVerifier:
         self.refused: Counter = Counter()   # reason -> messages refused
         self.accepted: Counter = Counter()  # channel -> messages accepted
         self._last: Dict[Tuple[int, str], int] = {}   # (signer, channel) -> last counter
+        # channel -> the block of its last message verified with commit=False, not yet taken.
+        self._pending: Dict[str, Signed] = {}
 
     @property
     def enabled(self) -> bool:
         return self.key is not None
 
     def verify(self, channel: str, data, relayed: bool = False, sender: Optional[int] = None,
-               max_bytes: Optional[int] = None) -> Optional[Signed]:
+               max_bytes: Optional[int] = None, commit: bool = True) -> Optional[Signed]:
         """Check a message received on channel; return its Signed block or raise AuthError.
 
         relayed: the type ends with a relay seal after the sender's block (a radio/out message,
         as the relay checks it; the seal is not looked at). sender: the only id allowed to
         sign on this channel (WORLD_SENDER for the world's topics, i for agent i's). max_bytes:
-        refuse larger payloads before any hashing (also with authentication off).
+        refuse larger payloads before any hashing (also with authentication off). commit: take
+        the message now (False: at commit(channel), class docstring).
         """
         try:
-            return self._accept(channel, self._verify(channel, data, relayed, sender, max_bytes))
+            signed = self._verify(channel, data, relayed, sender, max_bytes)
+            self._admit(channel, signed, commit)
+            return signed
         except AuthError as error:
             self.refused[error.reason] += 1
             raise
 
     def verify_delivery(self, channel: str, data, origin: Callable[[int], str],
-                        max_bytes: Optional[int] = None) -> Optional[Signed]:
+                        max_bytes: Optional[int] = None, commit: bool = True) -> Optional[Signed]:
         """Check a relayed message received on the inbox channel; return the sender's block.
 
         The seal must be the world's, for this channel, fresh and in the step window; the
         sender's block must verify on origin(sender), the channel it was sent on (replays and
         steps of the content are the relay's and the node's business). Raises AuthError.
+        commit: as for verify (the seal's counter is the one kept).
         """
         try:
             seal, signed = self._verify_delivery(channel, data, origin, max_bytes)
-            self._accept(channel, seal)
+            self._admit(channel, seal, commit)
             return signed
         except AuthError as error:
             self.refused[error.reason] += 1
             raise
+
+    def commit(self, channel: str):
+        """Take the last message verified on channel with commit=False (class docstring)."""
+        pending = self._pending.pop(channel, None)
+        if pending is not None:
+            self._take(channel, pending)
 
     def confirm(self, signed: Optional[Signed], step: int, sender: Optional[int] = None):
         """Check that the deserialized message says what its signature says, or raise AuthError.
@@ -404,20 +423,25 @@ class MessageVerifier:
             raise AuthError('bad_signature', f'{channel}: the {what} of {sender} does not verify')
         return Signed(sender, step, counter)
 
-    def _accept(self, channel: str, signed: Optional[Signed]) -> Optional[Signed]:
+    def _admit(self, channel: str, signed: Optional[Signed], commit: bool):
+        """Refuse a replay or a step out of the window; take the message or keep it pending."""
         if signed is None:
             self.accepted['unauthenticated'] += 1
-            return None
-        key = (signed.sender, channel)
-        last = self._last.get(key)
+            return
+        last = self._last.get((signed.sender, channel))
         if self.replays and last is not None and signed.counter <= last:
             raise AuthError('replayed', f'{channel}: counter {signed.counter} of {signed.sender} '
                                         f'not above {last}')
         self._check_step(channel, signed)
-        self._last[key] = signed.counter
+        if commit:
+            self._take(channel, signed)
+        else:
+            self._pending[channel] = signed
+
+    def _take(self, channel: str, signed: Signed):
+        self._last[(signed.sender, channel)] = signed.counter
         self._learn_step(signed)
         self.accepted[channel] += 1
-        return signed
 
     def _learn_step(self, signed: Signed):
         if signed.sender == WORLD_SENDER:

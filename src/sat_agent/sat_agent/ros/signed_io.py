@@ -14,7 +14,9 @@ The maths is sat_agent.message_auth (ROS-free); this module moves bytes between 
   relayed message's seal), deserializes in a try, checks that the fields say what the
   signature says (sender, step) and only then calls the node's callback with the message. A
   message refused on the way is counted per reason by the node's InputGuard (/diagnostics)
-  and never deserialized when its size or signature is wrong.
+  and never deserialized when its size or signature is wrong. Only a message taken advances
+  its sender's replay counter (MessageVerifier.commit): one refused after its signature
+  verified (undecodable, bad content, fields that disagree) leaves it where it was.
 """
 
 from typing import Callable, Collection, Optional
@@ -23,6 +25,7 @@ from rclpy.serialization import deserialize_message, serialize_message
 
 from sat_agent.message_auth import (AUTH_OFF_WARNING, AuthError, key_from_parameter,
                                     MessageVerifier, Signed, Signer, StepWindow, WORLD_SENDER)
+from sat_agent.ros.msg_conversions import InvalidMessage
 
 
 def auth_key(node, path: str) -> Optional[bytes]:
@@ -100,7 +103,7 @@ class VerifiedInput:
                 sender: Optional[int] = None, relayed: bool = False,
                 origin: Optional[Callable[[int], str]] = None, names_sender: bool = True):
         """Return the message of data if it passes every check, else None (counted)."""
-        signed = self.check(channel, data, max_bytes, sender, relayed, origin)
+        signed = self.check(channel, data, max_bytes, sender, relayed, origin, commit=False)
         if signed is False:
             return None
         try:
@@ -108,7 +111,10 @@ class VerifiedInput:
         except Exception as error:     # rclpy raises different types for different CDR defects
             self.guard.drop('undecodable', f'{channel}: not a {msg_type.__name__} ({error})')
             return None
-        return msg if self.confirm(channel, signed, msg, names_sender) else None
+        if not self.confirm(channel, signed, msg, names_sender):
+            return None
+        self.verifier.commit(channel)
+        return msg
 
     def receive_report(self, parser, kind: str, channel: str, data: bytes, lattice,
                        max_bytes: int, sender: Optional[int] = None, relayed: bool = False,
@@ -117,27 +123,34 @@ class VerifiedInput:
 
         As receive, with the radio's parser (radio_parsing.RadioParser: bounds, then decoding
         shared across the agents of a process) in place of deserialize_message; part may be an
-        InvalidMessage the caller drops after its own step checks.
+        InvalidMessage the caller drops after its own step checks (such a report does not
+        advance the sender's replay counter).
         """
-        signed = self.check(channel, data, max_bytes, sender, relayed, origin)
+        signed = self.check(channel, data, max_bytes, sender, relayed, origin, commit=False)
         if signed is False:
             return None
         msg, part = parser.parse(kind, data, lattice)
         if msg is None:
             self.guard.drop(part.reason, f'{channel}: {part.detail}')
             return None
-        return (msg, part) if self.confirm(channel, signed, msg) else None
+        if not self.confirm(channel, signed, msg):
+            return None
+        if not isinstance(part, InvalidMessage):
+            self.verifier.commit(channel)
+        return msg, part
 
     def check(self, channel: str, data: bytes, max_bytes: int, sender: Optional[int] = None,
-              relayed: bool = False, origin: Optional[Callable[[int], str]] = None):
+              relayed: bool = False, origin: Optional[Callable[[int], str]] = None,
+              commit: bool = True):
         """Check size and signature; return the sender's Signed block (None without a key).
 
-        Returns False (counted) when the message must be dropped.
+        Returns False (counted) when the message must be dropped. commit False: the message
+        advances the replay counter only at verifier.commit(channel) (receive does that).
         """
         try:
             if origin is not None:
-                return self.verifier.verify_delivery(channel, data, origin, max_bytes)
-            return self.verifier.verify(channel, data, relayed, sender, max_bytes)
+                return self.verifier.verify_delivery(channel, data, origin, max_bytes, commit)
+            return self.verifier.verify(channel, data, relayed, sender, max_bytes, commit)
         except AuthError as error:
             self.guard.drop(error.reason, error.detail)
             return False
