@@ -135,8 +135,11 @@ def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_
         # The attack writers take part in world_sim's handshake, so step 1 waits until each has
         # matched every announced reader of its topic. Waiting for a first match only let a
         # writer pass on the test's own capture of the topic: the metrics node then never got
-        # an attack on the agents' topics (flake_hunt, full-suite run).
-        announce(node, watched, [hostile.publisher(*target) for target in targets])
+        # an attack on the agents' topics (flake_hunt, full-suite run). An observer, though it
+        # writes an agent's commands (a hijack), or world_sim would wait for the observer it is
+        # not and start only at its start-up timeout.
+        announce(node, watched, [hostile.publisher(*target) for target in targets],
+                 observer=True)
         spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 240,
                    'the attacked run ended', processes.values())
         spin_until(node, lambda: diagnostics.final(*final_from), 30,

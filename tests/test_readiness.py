@@ -54,3 +54,19 @@ def test_one_node_may_play_several_agents():
     both = json.loads(announcement('/scripted', [], {'/agent_1/cmd': 1, '/agent_2/cmd': 1}))
     assert unmet({'/scripted': both}, ['/agent_1/cmd', '/agent_2/cmd'], {}, [1, 2],
                  observers=0) == []
+
+
+def test_a_node_that_says_observer_is_one_even_when_it_writes_an_agents_commands():
+    # An attack test hijacks agent 1's commands: its writer must match world_sim's reader, and
+    # it is the observer world_sim waits for, not agent 1.
+    hostile = json.loads(announcement('/hostile', [],
+                                      {'/agent_1/cmd': 2}, observer=True))
+    announced = {'/agent_1/agent': agent(), '/recorder': recorder(), '/hostile': hostile}
+    assert unmet(announced, WORLD_READS, WORLD_WRITES, [1], observers=2) == []
+    assert unmet({'/recorder': recorder(), '/hostile': hostile}, WORLD_READS, WORLD_WRITES,
+                 [1], observers=2) == ['agent 1 has not announced itself']
+    hostile['writes']['/agent_1/cmd'] = 1
+    assert unmet(announced, WORLD_READS, WORLD_WRITES, [1], observers=2) == [
+        '/hostile writes /agent_1/cmd to 1 of 2 readers']
+    # Without the flag the same announcement speaks for agent 1, as a scripted agent's does.
+    assert 'observer' not in json.loads(announcement('/scripted', [], {'/agent_1/cmd': 1}))

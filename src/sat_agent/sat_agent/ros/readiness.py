@@ -15,7 +15,10 @@ writes, how many readers its writer has matched::
      "writes": {"/agent_1/cmd": 2, "/agent_1/status": 3, ...}}
 
 once every subscription it reads the run through has a publisher, and again whenever a writer's
-count changes. world_sim starts when every agent and ``observers`` other nodes have announced
+count changes. A node that writes an agent's commands speaks for that agent, unless it says
+``"observer": true`` (a test that attacks a run writes on an agent's topics too, and is one of
+the observers world_sim waits for). world_sim starts when every agent and ``observers`` other
+nodes have announced
 and every writer (theirs and its own) has matched at least as many readers as the announced
 nodes (and world_sim itself) that read its topic: ``unmet`` says what is still missing.
 A reader that is not announced (``ros2 topic echo``) is not waited for; one that is counted in
@@ -38,15 +41,17 @@ QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
 CHECK_PERIOD_S = 0.1
 
 
-def announcement(node_name: str, reads: Iterable[str], writes: Mapping[str, int]) -> str:
+def announcement(node_name: str, reads: Iterable[str], writes: Mapping[str, int],
+                 observer: bool = False) -> str:
     """Return the JSON text a node announces (module docstring)."""
-    return json.dumps({'node': node_name, 'reads': sorted(set(reads)),
-                       'writes': dict(sorted(writes.items()))})
+    text = {'node': node_name, 'reads': sorted(set(reads)), 'writes': dict(sorted(writes.items()))}
+    return json.dumps(dict(text, observer=True) if observer else text)
 
 
 def is_agent(announced: Mapping, agent_id: int) -> bool:
-    """Whether an announcement speaks for agent agent_id (it writes its commands)."""
-    return f'/agent_{agent_id}/cmd' in announced['writes']
+    """Whether an announcement speaks for agent agent_id (it writes its commands, module doc)."""
+    return (f'/agent_{agent_id}/cmd' in announced['writes']
+            and announced.get('observer') is not True)
 
 
 def unmet(announcements: Mapping[str, Mapping], own_reads: Iterable[str],
@@ -82,13 +87,16 @@ class ReadyAnnouncer:
     """Announce a node on TOPIC (module docstring) until stop() or, without writers, once.
 
     subscriptions: those the node reads the run through (each must have a publisher first);
-    publishers: the node's writers whose matched readers world_sim checks.
+    publishers: the node's writers whose matched readers world_sim checks; observer: the node
+    is an observer even if it writes an agent's commands.
     """
 
-    def __init__(self, node, subscriptions, publishers=(), period: float = CHECK_PERIOD_S):
+    def __init__(self, node, subscriptions, publishers=(), period: float = CHECK_PERIOD_S,
+                 observer: bool = False):
         self._node = node
         self._subscriptions = list(subscriptions)
         self._publishers = list(publishers)
+        self._observer = observer
         self._announced = None
         self._publisher = node.create_publisher(String, TOPIC, QOS)
         self._timer = steady_timer(node, period, self._check)
@@ -98,7 +106,8 @@ class ReadyAnnouncer:
             return
         text = announcement(self._node.get_fully_qualified_name(),
                             (s.topic_name for s in self._subscriptions),
-                            {p.topic_name: p.get_subscription_count() for p in self._publishers})
+                            {p.topic_name: p.get_subscription_count() for p in self._publishers},
+                            self._observer)
         if text != self._announced:
             self._publisher.publish(String(data=text))
             self._announced = text
