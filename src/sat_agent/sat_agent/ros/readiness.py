@@ -18,9 +18,9 @@ once every subscription it reads the run through has a publisher, and again when
 count changes. A node that writes an agent's commands speaks for that agent, unless it says
 ``"observer": true`` (a test that attacks a run writes on an agent's topics too, and is one of
 the observers world_sim waits for). world_sim starts when every agent and ``observers`` other
-nodes have announced
-and every writer (theirs and its own) has matched at least as many readers as the announced
-nodes (and world_sim itself) that read its topic: ``unmet`` says what is still missing.
+nodes have announced and every writer (theirs and its own) has matched at least as many readers
+as the announced nodes (and world_sim itself) that read its topic: ``unmet`` says what is
+still missing.
 A reader that is not announced (``ros2 topic echo``) is not waited for; one that is counted in
 its place would let a writer pass with one announced reader unmatched.
 """
