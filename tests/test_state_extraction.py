@@ -11,7 +11,7 @@ import pytest
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD
-from sat_agent.state_extraction import ExtractionMemory, NHatExtractor
+from sat_agent.state_extraction import ExtractionMemory, NHatExtractor, within_radius
 
 PARAMS = SatParams()
 POSE = np.array([50.0, 50.0])
@@ -225,3 +225,26 @@ def test_confirmation_switch_takes_confirm_scans_or_the_first_estimate(extractor
     # stays a target; a target from the first scan with it off.
     assert [len(on.extract(phd, POSE).targets) for _ in range(3)] == [0, 1, 1]
     assert [len(off.extract(phd, POSE).targets) for _ in range(3)] == [1, 1, 1]
+
+
+# Per radius about (50, 50): a point with dx^2 + dy^2 < r^2 but hypot >= r, and one the other way.
+ROUNDING_DISAGREES = {
+    0.5: [[50.45273724047382, 49.78779964399618], [49.5899309351337, 49.71391721121382]],
+    1.0: [[49.04734579483965, 50.30405585899683], [49.28134524718646, 49.304632941347876]],
+    2.0: [[49.10821671719605, 48.20982610439337], [48.38498889461407, 48.82028006311663]]}
+
+
+@given(st.lists(st.tuples(st.floats(-10.0, 10.0), st.floats(-10.0, 10.0)), max_size=60),
+       st.sampled_from(sorted(ROUNDING_DISAGREES)))
+def test_the_radius_gate_is_hypot_below_the_radius(offsets, radius):
+    """within_radius (box pre-filter, then hypot) gives the plain hypot test's mask."""
+    center = np.array([50.0, 50.0])
+    points = center + np.array(offsets, dtype=float).reshape(-1, 2)
+    # Points on the circle where dx^2 + dy^2 < r^2 and hypot < r disagree (found by a random
+    # search), on its box, and non-finite ones.
+    points = np.vstack([points, ROUNDING_DISAGREES[radius],
+                        center + [[radius, 0.0], [0.0, -radius], [radius, radius]],
+                        [[np.nan, 50.0], [np.inf, 50.0], [1e300, 50.0]]])
+    with np.errstate(invalid='ignore', over='ignore'):
+        expected = np.hypot(*(points - center).T) < radius
+        np.testing.assert_array_equal(within_radius(points, center, radius), expected)

@@ -94,7 +94,10 @@ def test_no_particles_means_stay():
 
 
 def test_score_equals_divergence_of_a_full_pseudo_update():
-    """The pre-selection of particles near the agent does not change any score."""
+    """Scoring only the particles near the agent, then inside each square, changes no score.
+
+    Bit for bit: the scores decide the action, and the evaluation's figures are reproduced.
+    """
     rng = np.random.default_rng(3)
     states = np.zeros((3000, 4))
     states[:, [0, 2]] = rng.uniform(0, 100, (3000, 2))
@@ -105,8 +108,7 @@ def test_score_equals_divergence_of_a_full_pseudo_update():
     for action, pose in enumerate(actions.candidate_poses(POSE, PARAMS.actions)):
         z = predicted_ideal_measurements(estimate, pose, SENSOR)
         full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR)
-        assert scores[action] == pytest.approx(renyi_divergence(predicted.weights, full, 0.5),
-                                               rel=1e-9)
+        assert scores[action] == renyi_divergence(predicted.weights, full, 0.5)
 
 
 def test_track_standoff_switch_keeps_the_target_at_the_stand_off_or_takes_the_pure_argmax():

@@ -35,7 +35,8 @@ Both parts are interpretations: the paper leaves the birth model open. The addit
 (beyond_paper/newborn_gate.py; ``keep_newborns`` is the paper's).
 
 Gating: p_D is 0 outside the sensing square, so the update leaves those particles' weights
-unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the particles inside.
+unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the particles inside
+(``detection_factors``).
 """
 
 from dataclasses import dataclass
@@ -81,46 +82,54 @@ def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.nda
     w_i <- [1 - p_D(x_i) + sum_z p_D(x_i) g(z | x_i) / (kappa(z) + tau(z))] w_i,
     tau(z) = sum_j p_D(x_j) g(z | x_j) w_j, kappa = lambda f_c (sensor_model.clutter_intensity).
 
-    Only particles inside the sensing square are touched; the others are copied bit for bit.
-    Each measurement's column is scaled by its largest log-likelihood before exponentiating, so
-    g values far below float range do not underflow to 0 / 0. When kappa = 0 and no particle
-    can have produced z (tau(z) = 0) the term is 0 / 0; it is taken as 0: z then says nothing
-    about the existing particles (the measurement-driven birth accounts for it).
+    Only particles inside the sensing square are touched (``detection_factors``); the others are
+    copied bit for bit.
 
     explained: optional (M,) output array, filled with tau(z) / (kappa(z) + tau(z)), the share
     of each measurement the predicted targets explain (0 when no particle is in the square).
     """
     new_weights = np.array(weights, dtype=float, copy=True)
-    inside = np.flatnonzero(sensor_model.in_sensing_square(
-        motion_model.positions(states), pose, sensor.square_side))
+    points = motion_model.positions(states)
+    inside = np.flatnonzero(sensor_model.in_sensing_square(points, pose, sensor.square_side))
+    new_weights[inside] *= detection_factors(points[inside], new_weights[inside], measurements,
+                                             pose, sensor, explained)
+    return new_weights
+
+
+def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
+                      sensor: SensorParams, explained: Optional[np.ndarray] = None) -> np.ndarray:
+    """Return the factors 1 - p_D + sum_z p_D g / (kappa + tau) of particles inside the square.
+
+    points and weights: the (N, 2) positions and weights of the particles inside S_a(pose),
+    where p_D = sensor.p_detect (Eqn. sensing_model); tau sums over them alone. Each
+    measurement's column is scaled by its largest log-likelihood before exponentiating, so g
+    values far below float range do not underflow to 0 / 0. When kappa = 0 and no particle can
+    have produced z (tau(z) = 0) the term is 0 / 0; it is taken as 0: z then says nothing about
+    the existing particles (the measurement-driven birth accounts for it). explained: as in
+    ``update_weights``.
+    """
     if explained is not None:
         explained[:] = 0.0
-    if inside.size == 0:
-        return new_weights
-    w_in = new_weights[inside]
-    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     p_d = sensor.p_detect
-    detected = np.zeros(inside.size)
-    if len(z):
-        log_g = sensor_model.log_likelihood(z, motion_model.positions(states[inside]), pose,
-                                            sensor)
-        peak = log_g.max(axis=0)                    # (M,) scale per measurement
-        np.subtract(log_g, peak, out=log_g)
-        g_scaled = np.exp(log_g, out=log_g)         # g / exp(peak), in (0, 1]
-        tau_scaled = p_d * (w_in @ g_scaled)        # tau(z) / exp(peak)
-        kappa = sensor_model.clutter_intensity(sensor)
-        if kappa > 0.0:
-            kappa_scaled = np.exp(np.minimum(np.log(kappa) - peak, _MAX_EXPONENT))
-        else:
-            kappa_scaled = np.zeros_like(peak)
-        denominator = kappa_scaled + tau_scaled
-        inverse = np.divide(1.0, denominator, out=np.zeros_like(denominator),
-                            where=denominator > 0.0)
-        detected = p_d * (g_scaled @ inverse)
-        if explained is not None:
-            explained[:] = tau_scaled * inverse
-    new_weights[inside] = w_in * ((1.0 - p_d) + detected)
-    return new_weights
+    z = np.asarray(measurements, dtype=float).reshape(-1, 2)
+    if not len(z) or not len(points):
+        return np.full(len(points), 1.0 - p_d)
+    log_g = sensor_model.log_likelihood(z, points, pose, sensor)
+    peak = log_g.max(axis=0)                    # (M,) scale per measurement
+    np.subtract(log_g, peak, out=log_g)
+    g_scaled = np.exp(log_g, out=log_g)         # g / exp(peak), in (0, 1]
+    tau_scaled = p_d * (weights @ g_scaled)     # tau(z) / exp(peak)
+    kappa = sensor_model.clutter_intensity(sensor)
+    if kappa > 0.0:
+        kappa_scaled = np.exp(np.minimum(np.log(kappa) - peak, _MAX_EXPONENT))
+    else:
+        kappa_scaled = np.zeros_like(peak)
+    denominator = kappa_scaled + tau_scaled
+    inverse = np.divide(1.0, denominator, out=np.zeros_like(denominator),
+                        where=denominator > 0.0)
+    if explained is not None:
+        explained[:] = tau_scaled * inverse
+    return (1.0 - p_d) + p_d * (g_scaled @ inverse)
 
 
 def systematic_resample(weights: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:

@@ -6,7 +6,9 @@ would detect (the Gaussian g peaks at z = h(x, u), its sigmas depend on x, not o
 lists every predicted target, but p_D is 0 outside the square, Eqn. sensing_model, so a target
 there yields no measurement: an interpretation). A pseudo
 update of the predicted PHD with Z_{k|k-1}(u) (Eqn. satphd_correct, ``update_weights``) gives
-D_hat_k(u), and the score is the Renyi divergence between the two Poisson multi-target densities:
+D_hat_k(u); it changes only the particles inside u's square (p_D = 0 elsewhere), so only those
+are updated and scored (``pseudo_update_score``). The score is the Renyi divergence between the
+two Poisson multi-target densities:
 
     xi(u) = int D + alpha / (1 - alpha) int D_hat - 1 / (1 - alpha) int D_hat^alpha D^(1 - alpha),
 
@@ -29,7 +31,7 @@ from sat_agent import actions, motion_model, sensor_model
 from sat_agent.beyond_paper.search_while_tracking import SearchWhileTracking
 from sat_agent.beyond_paper.track_standoff import standoff_mask
 from sat_agent.config import SatParams, SensorParams
-from sat_agent.phd_filter import ParticlePHD, update_weights
+from sat_agent.phd_filter import detection_factors, ParticlePHD
 from sat_agent.search_density import SearchDensity
 from sat_agent.state_extraction import MultiTargetEstimate
 
@@ -56,6 +58,20 @@ def renyi_divergence(predicted_weights: np.ndarray, posterior_weights: np.ndarra
     w, w_hat = w[changed], w_hat[changed]
     overlap = np.sum(w ** (1.0 - alpha) * w_hat ** alpha)
     return float(w.sum() + alpha / (1.0 - alpha) * w_hat.sum() - overlap / (1.0 - alpha))
+
+
+def pseudo_update_score(points: np.ndarray, weights: np.ndarray, estimates: MultiTargetEstimate,
+                        pose, sensor: SensorParams, alpha: float) -> float:
+    """Return xi(u) for the action putting the agent at pose (pseudo update, Renyi divergence).
+
+    points, weights: the predicted particles. Particles outside S_a(pose) keep their weight
+    and add exactly 0 (``renyi_divergence``), so only those inside are updated and summed: the
+    same score, bit for bit, as the divergence over the whole set after ``update_weights``.
+    """
+    inside = np.flatnonzero(sensor_model.in_sensing_square(points, pose, sensor.square_side))
+    w = weights[inside]
+    z = predicted_ideal_measurements(estimates, pose, sensor)
+    return renyi_divergence(w, w * detection_factors(points[inside], w, z, pose, sensor), alpha)
 
 
 def every_action(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> np.ndarray:
@@ -97,14 +113,13 @@ class TrackingControl:
         # Only particles some candidate square can see take part: the others keep their weight
         # under every action and add exactly 0 to every score.
         reach = sensor.square_side + 2.0 * float(np.max(np.abs(poses - np.asarray(pose, float))))
-        near = sensor_model.in_sensing_square(motion_model.positions(predicted.states), pose,
-                                              reach)
-        states, weights = predicted.states[near], predicted.weights[near]
+        points = motion_model.positions(predicted.states)
+        near = sensor_model.in_sensing_square(points, pose, reach)
+        points, weights = points[near], predicted.weights[near]
         alpha = params.cooperation.renyi_alpha
         scores = np.full(len(poses), -np.inf)
         for action in np.flatnonzero(allowed):
-            z = predicted_ideal_measurements(estimates, poses[action], sensor)
-            posterior = update_weights(states, weights, z, poses[action], sensor)
-            scores[action] = renyi_divergence(weights, posterior, alpha)
+            scores[action] = pseudo_update_score(points, weights, estimates, poses[action],
+                                                 sensor, alpha)
         candidates = preferred if preferred.any() else allowed
         return self._choose(scores, candidates, poses, search), scores
