@@ -7,12 +7,15 @@ an agent's views).
 ``ros2 param describe`` shows each parameter's description, range and read-only flag.
 """
 
+from pathlib import Path
+import re
+
 from geometry_msgs.msg import PoseStamped
 import pytest
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
-from ros_harness import (executable, PARAMS, ros_node, scaled, spin_until, started,
-                         write_scenario)
+from ros_harness import (executable, PARAMS, ros_node, scaled, spin_until, started, wait_for_text,
+                         wait_matched, write_scenario)
 
 from sat_agent.config import SatParams
 from sat_agent.node_params import AgentNodeParams
@@ -24,8 +27,7 @@ from sat_msgs.msg import RadioTraffic
 # Bounds (scaled by SAT_TEST_TIMEOUT_SCALE): a node's start-up, a parameter service's answer.
 START_S = 60.0
 ANSWER_S = 30.0
-# Steps after a change that may still show the old value (messages in flight) or be watched.
-SETTLE_STEPS = 2
+# Steps watched after a change.
 WATCH_STEPS = 4
 
 
@@ -52,6 +54,19 @@ def assert_refused(node, client, name, value, reason: str):
     """Set one parameter and check it is refused with reason in the answer."""
     result = set_one(node, client, name, value)
     assert not result.successful and reason in result.reason, result.reason
+
+
+def change_step(log: Path, node_name: str, name: str, processes) -> int:
+    """Return the step a node's log says a live change of name holds from (ros_params.py).
+
+    From the node's own log, not a topic: what the test last received of any topic may be
+    steps behind the node (DDS orders nothing across topics and the test may lag).
+    """
+    pattern = re.compile(rf'live change (at|after) step (\d+): {re.escape(name)} = ')
+    wait_for_text(log, f': {name} = ', ANSWER_S, f"{node_name}'s log line of the change",
+                  processes)
+    where, step = pattern.search(log.read_text(encoding='utf-8')).groups()
+    return int(step) + (where == 'after')
 
 
 def get_one(node, client, name):
@@ -122,12 +137,16 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
         running = (world_sim, agent_1, agent_2)
         node.create_subscription(RadioTraffic, '/world/radio',
                                  lambda m: traffic.__setitem__(m.step, len(m.link_a)), 50)
-        node.create_subscription(PoseStamped, f'/agent_1/{VIEW_PREFIX}pose',
-                                 lambda m: views.add(m.header.stamp.sec), WORLD)
+        view_reader = node.create_subscription(PoseStamped, f'/agent_1/{VIEW_PREFIX}pose',
+                                               lambda m: views.add(m.header.stamp.sec), WORLD)
         client = services(node, '/world_sim')
         # 10 m apart at the start, within C_R = 50 m: linked.
         spin_until(node, lambda: any(traffic.values()), START_S, 'a step with a radio link',
                    running)
+        # The world's traffic says nothing of the agent's writers: under load this reader can
+        # match the view writer seconds later (transient local, so it then gets the history).
+        wait_matched(node, [view_reader], START_S,
+                     "the test's reader of agent 1's pose view matching the agent's writer")
 
         assert_refused(node, client, 'cooperation.comm_range', -1.0,
                        'cooperation.comm_range out of range Min: 0.0, Max: inf, value: -1.0')
@@ -138,19 +157,24 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
 
         applied = set_one(node, client, 'cooperation.comm_range', 0.0)
         assert applied.successful, applied.reason
-        changed_at = max(traffic)
+        changed_at = change_step(tmp_path / 'world.log', 'world_sim', 'cooperation.comm_range',
+                                 running)
         assert get_one(node, client, 'cooperation.comm_range') == 0.0
-        # After the steps in flight, no pair is within 0 m.
-        spin_until(node, lambda: max(traffic) > changed_at + WATCH_STEPS, START_S,
+        # From the step the change landed in, no pair is within 0 m.
+        spin_until(node, lambda: max(traffic) >= changed_at + WATCH_STEPS, START_S,
                    f'{WATCH_STEPS} steps after the change', running)
-        assert all(traffic[k] == 0 for k in traffic if k > changed_at + SETTLE_STEPS)
+        assert [k for k in traffic if k < changed_at and traffic[k]], 'no link before the change'
+        assert all(traffic[k] == 0 for k in traffic if k >= changed_at)
 
-        # The agent's views (every step at view_rate 1 with dt = 1 s) stop at view_rate 0.
+        # The agent's views (every step at view_rate 1 with dt = 1 s; stamp = step) come after
+        # the change too, and stop at view_rate 0.
         agent = services(node, '/agent_1/agent')
-        assert views
+        spin_until(node, lambda: views and max(views) > changed_at, START_S,
+                   f"agent 1's pose view of a step after {changed_at}", running)
         applied = set_one(node, agent, 'view_rate', 0.0)
         assert applied.successful, applied.reason
-        stopped_at = max(traffic)
-        spin_until(node, lambda: max(traffic) > stopped_at + WATCH_STEPS, START_S,
+        stopped_at = change_step(tmp_path / 'agent_1.log', 'agent 1', 'view_rate', running)
+        # Views the agent might still send after the change have had WATCH_STEPS steps to come.
+        spin_until(node, lambda: max(traffic) >= stopped_at + WATCH_STEPS, START_S,
                    f'{WATCH_STEPS} steps after view_rate 0', running)
-        assert not [k for k in views if k > stopped_at + SETTLE_STEPS]
+        assert not [k for k in views if k >= stopped_at]

@@ -52,11 +52,12 @@ class ScriptedAgents:
                     cls, f'{ns}/radio/in/{kind}',
                     lambda m, i=i, kind=kind: self.received[i].append((m.agent_id, m.step, kind)),
                     RELIABLE))
-        node.create_subscription(GroundTruth, '/world/truth', self.on_truth, WORLD)
-        node.create_subscription(RadioTraffic, '/world/radio',
-                                 lambda m: self.traffic.__setitem__(m.step, m), WORLD)
-        node.create_subscription(WorldStep, '/world/step',
-                                 lambda m: setattr(self, 'finished', m.finished), WORLD)
+        inputs += [
+            node.create_subscription(GroundTruth, '/world/truth', self.on_truth, WORLD),
+            node.create_subscription(RadioTraffic, '/world/radio',
+                                     lambda m: self.traffic.__setitem__(m.step, m), WORLD),
+            node.create_subscription(WorldStep, '/world/step',
+                                     lambda m: setattr(self, 'finished', m.finished), WORLD)]
         # world_sim starts once these writers matched its readers and its writers these.
         self.ready = announce(node, inputs, [p for pubs in self.pubs.values()
                                              for p in pubs.values()])

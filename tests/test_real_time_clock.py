@@ -8,13 +8,14 @@ range hear each other every step.
 from collections import defaultdict
 
 import pytest
-from ros_harness import run_swarm, write_scenario
+from ros_harness import run_swarm, scaled, write_scenario
 
 from sat_msgs.msg import WorldStep
 from sat_world_sim.bag_replay import deserialized
 
 pytestmark = pytest.mark.ros
 STEPS = 8
+PERIOD_S = 1.0
 
 
 @pytest.mark.timeout(300)
@@ -26,8 +27,10 @@ def test_real_time_run_keeps_the_range_gate_and_every_step(tmp_path):
         agents=[{'id': 1, 'start': [10.0, 10.0]}, {'id': 2, 'start': [30.0, 10.0]},
                 {'id': 3, 'start': [95.0, 95.0]}])
     run_dir = tmp_path / 'run'
+    # A report later than its step's period is dropped (stale), by design: the period leaves
+    # an agent's step (first one included: its core is built then) room on a loaded machine.
     code, metrics, output = run_swarm(run_dir, scenario, '--clock', 'real_time', '--period',
-                                      '0.5', '--quiet', timeout=240)
+                                      str(scaled(PERIOD_S)), '--quiet', timeout=240)
     assert code == 0, output[-3000:]
     assert [s['step'] for s in metrics['steps']] == list(range(1, STEPS + 1))
     assert isinstance(metrics['late_commands'], int)

@@ -115,7 +115,9 @@ class AgentNode(Node):
     def __init__(self, radio_parser: Optional[RadioParser] = None, **kwargs):
         super().__init__('agent', **kwargs)
         self.radio_parser = radio_parser or RadioParser()
-        self.parameters = NodeParameters(self, (SatParams, AgentNodeParams), LIVE, self._retune)
+        # Steps run whole between callbacks: a change holds from the step after the last one.
+        self.parameters = NodeParameters(self, (SatParams, AgentNodeParams), LIVE, self._retune,
+                                         lambda: f'after step {self.last_step}')
         self.params, self.node_params = self.parameters.values
         self.agent_id = self.node_params.agent_id
         self.dt = self.params.motion.dt

@@ -47,14 +47,19 @@ class NodeParameters:
     """A node's parameters, declared from its schemas; ``values`` holds one instance per schema.
 
     live: the dotted names this node applies while it runs (each must be live in its schema);
-    on_change(*values) is called after a live change is stored. The schemas' names must not
-    overlap. Raises ParameterError if a start-up value is not allowed.
+    on_change(*values) is called after a live change is stored. Each live change is logged
+    with ``moment()``, where the node is in its run (e.g. "at step 12"), so a run's log says
+    from which step on a change holds. The schemas' names must not overlap. Raises
+    ParameterError if a start-up value is not allowed.
     """
 
     def __init__(self, node, schemas: Sequence[type], live: Sequence[str] = (),
-                 on_change: Optional[Callable] = None):
+                 on_change: Optional[Callable] = None,
+                 moment: Callable[[], str] = lambda: 'before its run'):
+        self._node = node
         self._owner = {}      # dotted name -> index of its schema
         self._on_change = on_change
+        self._moment = moment
         self.values = []
         for index, schema in enumerate(schemas):
             given = {}
@@ -90,5 +95,8 @@ class NodeParameters:
 
     def _apply(self, parameters) -> None:
         self.values = self._changed(parameters)
+        changed = ', '.join(f'{p.name} = {p.value!r}' for p in parameters if p.name in self._owner)
+        if changed:
+            self._node.get_logger().info(f'live change {self._moment()}: {changed}')
         if self._on_change is not None:
             self._on_change(*self.values)

@@ -105,8 +105,9 @@ class WorldSimNode(Node):
 
     def __init__(self, **kwargs):
         super().__init__('world_sim', **kwargs)
+        # A change landing during step k gates the links and reports of step k on.
         self.parameters = NodeParameters(self, (SatParams, WorldNodeParams), LIVE,
-                                         self._retune)
+                                         self._retune, lambda: f'at step {self.world.step}')
         self.params, self.settings = self.parameters.values
         node = self.settings
         scenario = load_scenario(node.scenario or default_scenario(), self.params.area.width,
