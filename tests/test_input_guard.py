@@ -19,6 +19,9 @@ class FakeNode:
     def get_logger(self):
         return self
 
+    def get_fully_qualified_name(self):
+        return '/test'
+
     def warning(self, text):
         self.warnings.append(text)
 
@@ -38,3 +41,23 @@ def test_warnings_are_throttled_per_reason_and_count_what_they_skipped(monkeypat
     assert node.warnings[-1] == 'dropped (stale_step): older (4 more since the last warning)'
     guard.drop('stale_step', 'again')
     assert len(node.warnings) == 3
+
+
+def test_each_status_carries_the_process_peak_memory():
+    """A bomb that got through shows in the counters, even those of an exited node."""
+    guard = InputGuard(FakeNode(), 'test', 1.0)
+    ballast = bytearray(64 << 20)
+    ballast[::4096] = b'x' * len(ballast[::4096])       # touched: resident now
+    resident = resident_kb()
+    values = {v.key: v.value for v in guard.status(final=True).values}
+    assert resident >= 64 << 10
+    # A peak: at least what is resident now (earlier tests may have held more).
+    assert int(values['peak_memory_kb']) >= resident
+    assert values['final'] == '1'
+    del ballast
+
+
+def resident_kb() -> int:
+    """Return this process's resident memory (VmRSS) in kB."""
+    with open('/proc/self/status', encoding='ascii') as status:
+        return next(int(line.split()[1]) for line in status if line.startswith('VmRSS:'))

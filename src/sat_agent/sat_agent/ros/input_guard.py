@@ -4,7 +4,9 @@ A counter per reason, rate-limited warnings, and the counters published on ``/di
 (diagnostic_msgs/DiagnosticArray) every ``diagnostics_period`` seconds (a node parameter,
 sat_agent.node_params.SteppingParams), and once more when the node ends (``final`` = 1, sent by
 node_runner.run_nodes and awaited until acknowledged): counts of a node's last moments are not
-lost between its last period and its exit.
+lost between its last period and its exit. Each status also carries ``peak_memory_kb``, the
+peak resident memory of the node's process so far: what a bomb that got through would grow,
+readable after the process has gone.
 """
 
 from collections import Counter
@@ -70,6 +72,7 @@ class InputGuard:
         values += [KeyValue(key=f'dropped.{k}', value=str(n))
                    for k, n in sorted(self.dropped.items())]
         message = f'{total} message(s) dropped'
+        values.append(KeyValue(key='peak_memory_kb', value=str(peak_memory_kb())))
         if final:
             values.append(KeyValue(key='final', value='1'))
         if self.auth is not None:
@@ -92,3 +95,9 @@ class InputGuard:
         """Publish the last counters and wait, bounded, until every reader acknowledged them."""
         self.publish(final=True)
         self._publisher.wait_for_all_acked(Duration(seconds=FINAL_DIAGNOSTICS_ACK_S))
+
+
+def peak_memory_kb(pid='self') -> int:
+    """Return a process's peak resident memory in kB (VmHWM; getrusage's ru_maxrss lags it)."""
+    with open(f'/proc/{pid}/status', encoding='ascii') as status:
+        return next(int(line.split()[1]) for line in status if line.startswith('VmHWM:'))
