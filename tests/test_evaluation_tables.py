@@ -82,7 +82,7 @@ def test_the_persistent_profile_is_set_against_every_other_policy_of_its_setting
     (persistent,) = [c for c in DESIGNS['default'] if c == PERSISTENT]
     assert [c.label for c in rivals_of(persistent, DESIGNS['default'])] == [
         'SAT-PHD (cooperative)', STRICT_LABEL, 'SAT-PHD, no radio', 'lawnmower', 'random walk',
-        'PHD-Voronoi', 'Thompson-sampling PHD']
+        'SAT-PHD + OR-Tools', 'PHD-Voronoi', 'Thompson-sampling PHD']
     cells = CELLS + [PERSISTENT, ELSEWHERE]
     rows = [result(cell, seed)['row'] for cell in cells for seed in SEEDS]
     table = rivals_table(cells, rows)
