@@ -14,6 +14,7 @@ from sat_world_sim.random_scenarios import paper_random_scenario, random_scenari
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import ablation_cells, Cell, CONFIG_COLUMNS, default_cell
 from sat_world_sim.study_design import DESIGNS, factorial_cells, persistent_ablation_cells
+from sat_world_sim.study_design import ORACLE, ORACLE_LABEL, ORACLE_TRACK
 from sat_world_sim.study_design import prepare_cells, reference_of
 
 CONFIG = Path(__file__).resolve().parent.parent / 'config'
@@ -79,9 +80,14 @@ def test_the_default_design_has_every_policy_strict_and_oracle_where_the_issue_a
         'paper', 'paper_random', 'random'}
     paper = {c.label for c in cells if c.setting == 'paper'}
     assert any('strict' in label for label in paper) and any('oracle' in label for label in paper)
-    # The acceptance scripts find the oracle at the random default by these columns.
-    (oracle,) = [c for c in cells if c.setting == 'random' and c.is_oracle]
+    # The acceptance scripts find the oracle at the random default by these columns, and take
+    # the first label holding "oracle" in the CSV's (cell) order as the sweep's.
+    (oracle,) = [c for c in cells if c.setting == 'random' and c.policy == ORACLE]
     assert (oracle.agents, oracle.clutter, oracle.comm_range) == (4, 10.0, 50.0)
+    assert next(c for c in cells if 'oracle' in c.label.lower()).label == ORACLE_LABEL
+    # Sweep-and-track (a reference for the tracked share) at every setting of the design.
+    assert {c.setting for c in cells if c.policy == ORACLE_TRACK} == {
+        'paper', 'paper_random', 'random'}
     assert any('persistent' in c.label for c in cells if c.setting == 'random')
 
 

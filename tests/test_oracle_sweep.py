@@ -6,9 +6,10 @@ import pytest
 from sat_agent.config import SatParams
 from sat_agent.sensor_model import in_sensing_square
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.oracle_sweep import lane_ends, lap_positions, run_oracle_sweep
+from sat_world_sim.oracle_sweep import follow_position, lane_ends, lap_positions, run_oracle_sweep
 from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions, sweep_speed
 from sat_world_sim.random_scenarios import random_scenario
+from sat_world_sim.scenario import scenario_from_mapping
 from sat_world_sim.world_model import World
 
 PARAMS = SatParams()
@@ -88,3 +89,84 @@ def test_place_agents_refuses_positions_outside_the_area():
         world.place_agents({1: np.array([50.0, 50.0]), 2: np.array([101.0, 50.0])})
     world.place_agents({1: np.array([50.0, 50.0]), 2: np.array([0.0, 100.0])})
     np.testing.assert_allclose(world.pose(2), (0.0, 100.0))
+
+
+def followed_scenario(steps: int = 120):
+    """Agent 1 starts on a target walking east at 1 m/s (born 1, dies 60); agent 2 far away."""
+    return scenario_from_mapping({
+        'name': 'follow', 'seed': 3, 'steps': steps, 'truth_process_noise': 1.0e-4,
+        'agents': [{'id': 1, 'start': [20.0, 50.0]}, {'id': 2, 'start': [90.0, 90.0]}],
+        'targets': [{'id': 1, 'born': 1, 'died': 60, 'start': [21.0, 51.0],
+                     'end': [80.0, 51.0]}]})
+
+
+def test_sweep_and_track_follows_a_target_in_view_until_it_dies_then_sweeps_again():
+    scenario = followed_scenario()
+    run = run_oracle_sweep(scenario, PARAMS, follow=True)
+    speed = sweep_speed(PARAMS)
+    poses = np.array([r.agent_poses[1] for r in run.records])
+    assert np.hypot(*np.diff(poses, axis=0).T).max() <= speed + 1e-9
+    alive = [r for r in run.records if 1 in r.truth_ids]
+    assert [r.step for r in alive] == list(range(1, 61))
+    for record in alive:
+        # In view at every step of its life, reported, and agent 1 is the one tracking it.
+        assert in_sensing_square(record.truth_positions, record.agent_poses[1], SIDE).all()
+        np.testing.assert_allclose(record.estimates[1], record.truth_positions)
+        assert record.modes == {1: 'TRACK', 2: 'SEARCH'}
+    after = run.records[60:]
+    assert {m for r in after for m in r.modes.values()} == {'SEARCH'}
+    # Back on its strip: the sweep's path from where the target died, leg to the nearest
+    # waypoint then laps.
+    cycle = sweep_cycle(strip_lanes(PARAMS, 2)[0], lane_ends(PARAMS))
+    expected = sweep_positions(poses[60], cycle, speed, len(after))
+    np.testing.assert_allclose(poses[60:], expected)
+    summary = compute_metrics(run.records, scenario.name, 3)['summary']
+    assert summary['tracked_share'] == 1.0
+    # The sweep alone passes it by.
+    sweep = compute_metrics(run_oracle_sweep(scenario, PARAMS).records, scenario.name, 3)
+    assert sweep['summary']['tracked_share'] < 0.5
+
+
+def test_sweep_and_track_gives_each_target_one_follower_and_finds_what_enters():
+    scenario = random_scenario(7, 4, 200)
+    run = run_oracle_sweep(scenario, PARAMS, follow=True)
+    summary = compute_metrics(run.records, scenario.name, 7)['summary']
+    assert summary['detected_share'] == summary['entered_share'] > 0.0
+    assert summary['false_track_steps'] == 0
+    sweep = compute_metrics(run_oracle_sweep(scenario, PARAMS).records, scenario.name, 7)
+    assert summary['tracked_share'] > sweep['summary']['tracked_share']
+    followers = 0
+    for record in run.records:
+        tracking = [a for a, mode in record.modes.items() if mode == 'TRACK']
+        followers += len(tracking)
+        for agent in tracking:
+            # A follower has some target in view at every step it follows.
+            assert len(record.estimates[agent]) >= 1
+    assert followers > 0
+
+
+def test_follow_position_aims_at_the_next_true_position_at_most_one_sweep_step_away():
+    speed = sweep_speed(PARAMS)
+    # [x, vx, y, vy]: the target will be at (31, 40) after T = 1 s.
+    np.testing.assert_allclose(follow_position((29.0, 40.0), (30.0, 1.0, 40.0, 0.0), speed,
+                                               PARAMS), (31.0, 40.0))
+    far = follow_position((0.0, 0.0), (30.0, 0.0, 40.0, 0.0), speed, PARAMS)
+    np.testing.assert_allclose(far, (0.6 * speed, 0.8 * speed))
+    # A target at the border heading out: the aim stays inside the area.
+    np.testing.assert_allclose(follow_position((99.0, 50.0), (99.5, 2.0, 50.0, 0.0), speed,
+                                               PARAMS), (100.0, 50.0))
+
+
+def test_a_follow_limit_releases_the_target_for_good_and_sends_the_agent_back_to_its_strip():
+    scenario = followed_scenario()
+    run = run_oracle_sweep(scenario, PARAMS, follow=True, follow_limit=10)
+    modes = [r.modes[1] for r in run.records]
+    assert modes[:10] == ['TRACK'] * 10
+    # Released at step 11 and never followed again, by anyone, while it lives (to k = 60).
+    assert {m for r in run.records[10:] for m in r.modes.values()} == {'SEARCH'}
+    poses = np.array([r.agent_poses[1] for r in run.records])
+    cycle = sweep_cycle(strip_lanes(PARAMS, 2)[0], lane_ends(PARAMS))
+    np.testing.assert_allclose(poses[10:], sweep_positions(poses[10], cycle, sweep_speed(PARAMS),
+                                                           len(poses) - 10))
+    tracked = compute_metrics(run.records, scenario.name, 3)['summary']['tracked_share']
+    assert tracked < 1.0

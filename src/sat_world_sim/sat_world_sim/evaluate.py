@@ -50,7 +50,8 @@ from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.oracle_sweep import run_oracle_sweep
 from sat_world_sim.scenario import load_scenario, Scenario, ScenarioError
-from sat_world_sim.study_design import catalogue, Cell, CONFIG_COLUMNS, DESIGNS, ORACLE
+from sat_world_sim.study_design import catalogue, Cell, CONFIG_COLUMNS, DESIGNS, ORACLE_TRACK
+from sat_world_sim.study_design import ORACLES
 from sat_world_sim.study_design import prepare_cells
 from sat_world_sim.study_design import scenario_for, SEEDS, select, STEPS, with_steps
 
@@ -78,7 +79,10 @@ def run_one(cell: Cell, seed: int, params: SatParams, paper: Scenario) -> dict:
     """Run one seed of one cell; return its CSV row, per-target rows and time series."""
     started = time.process_time()
     scenario = scenario_for(cell, seed, params, paper)
-    run = (run_oracle_sweep if cell.is_oracle else run_swarm)(scenario, params)
+    if cell.is_oracle:
+        run = run_oracle_sweep(scenario, params, follow=cell.policy == ORACLE_TRACK)
+    else:
+        run = run_swarm(scenario, params)
     metrics = compute_metrics(run.records, scenario.name, seed)
     steps = metrics['steps']
     summary = dict(metrics['summary'], wall_time_s=run.seconds,
@@ -135,7 +139,7 @@ def _rate_keys(columns, measured: bool) -> List[tuple]:
     setting, policy, planner = columns['setting'], columns['policy'], columns['planner']
     keys = [('clutter', setting, policy, planner, float(columns['clutter'])),
             ('kind', setting, policy, planner)]
-    if not measured and policy != ORACLE:
+    if not measured and policy not in ORACLES:
         keys.append(('kind', setting, 'sat', 'greedy'))
     return keys + [('policy', policy, planner), ('all',)]
 

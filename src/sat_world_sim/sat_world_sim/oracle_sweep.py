@@ -22,6 +22,20 @@ ceiling every policy is measured against, per setting and team size.
   P = 2 (m ceil(l / v) + (m - 1) ceil(a / v)) steps (for m = 1: 2 ceil(l / v)). Every lattice
   cell of the strip is in some square within any P consecutive steps of the lap; with
   v < a consecutive squares along a lane overlap, so no cell between them is skipped.
+
+The oracle sweep-and-track (``run_oracle_sweep(..., follow=True)``): a reference for the
+tracked share, which the sweep cannot give (a sweeper holds a target in view for a few steps).
+The agents sweep as above, with the same perfect sensor; a sweeping agent that has a target in
+its square which no agent follows follows it (the nearest; agents in ascending id order) and
+holds it in view until it dies: each step it flies, at most v, towards the target's next true
+position x + v T (inside the area), so a target slower than v never leaves its square. When its
+target dies it flies back to its strip (the nearest waypoint of its cycle) and laps again. Its
+strip is left unswept meanwhile: nobody takes it over. It is one reading of "sweep, and track
+what you find", knowing the truth, not a bound: an oracle that released targets or shared
+strips could trade tracked share for detected share differently. With ``follow_limit`` L an
+agent follows a target for L steps at most, then releases it for good (nobody follows it again)
+and flies back to its strip: L from 0 (the sweep) to the targets' lives traces how this oracle
+trades detected for tracked share (scripts/oracle_frontier.py).
 """
 
 import time
@@ -30,6 +44,7 @@ from typing import List, Optional
 import numpy as np
 
 from sat_agent.config import SatParams
+from sat_agent.motion_model import positions
 from sat_agent.search_map import SearchMap
 from sat_agent.sensor_model import in_sensing_square
 
@@ -38,8 +53,9 @@ from sat_world_sim.metrics import StepRecord
 from sat_world_sim.scenario import Scenario
 from sat_world_sim.world_model import World
 
-# What the records say the agents do: they search for ever.
+# What the records say the agents do: the sweep searches for ever; sweep-and-track follows.
 MODE = 'SEARCH'
+FOLLOW_MODE = 'TRACK'
 
 
 def sweep_speed(params: SatParams) -> float:
@@ -99,12 +115,69 @@ def sweep_positions(start, cycle: np.ndarray, speed: float, steps: int) -> np.nd
     return np.vstack([approach, laps])[:steps]
 
 
-def run_oracle_sweep(scenario: Scenario, params: SatParams,
-                     steps: Optional[int] = None) -> SwarmRun:
-    """Run the oracle sweep over the scenario's truth; records as the in-process swarm's.
+def follow_position(pose, state, speed: float, params: SatParams) -> np.ndarray:
+    """Return a follower's next position: towards the target's x + v T inside the area, <= v.
 
-    The truth is the World's, so for a seed the oracle meets the same targets as every policy.
-    final_density is the coverage (1 where some square has been).
+    state: the target's [x, vx, y, vy] (motion_model order).
+    """
+    pose = np.asarray(pose, dtype=float)
+    area = params.area
+    aim = positions(np.asarray(state, dtype=float)[None, :])[0]
+    aim = aim + params.motion.dt * np.asarray(state, dtype=float)[[1, 3]]
+    aim = np.clip(aim, (0.0, 0.0), (area.width, area.height))
+    offset = aim - pose
+    length = float(np.hypot(*offset))
+    return aim if length <= speed else pose + offset * (speed / length)
+
+
+class _Sweeper:
+    """One agent of the oracle: its cycle, the path it is on and the target it follows."""
+
+    def __init__(self, start, cycle: np.ndarray, speed: float, steps: int):
+        self.cycle, self.speed = cycle, speed
+        self.path = sweep_positions(start, cycle, speed, steps)
+        self.cursor = 0
+        self.target = None
+        self.since = 0
+
+    def resume(self, pose, steps_left: int) -> None:
+        """Back to the strip from pose: its nearest waypoint, then laps (sweep_positions)."""
+        self.path = sweep_positions(pose, self.cycle, self.speed, steps_left)
+        self.cursor = 0
+        self.target = None
+
+    def next_sweep_position(self) -> np.ndarray:
+        """Step along the path and return its next position."""
+        self.cursor += 1
+        return self.path[self.cursor]
+
+
+def _assign_followers(team, truth, poses, side: float, row: int, released: set) -> None:
+    """Free agents (ascending id) follow the nearest target in view nobody follows or released."""
+    followed = {s.target for s in team.values() if s.target is not None} | released
+    for agent_id in sorted(team):
+        sweeper = team[agent_id]
+        if sweeper.target is not None:
+            continue
+        seen = in_sensing_square(truth.positions, poses[agent_id], side)
+        free = seen & ~np.isin(truth.ids, list(followed))
+        if free.any():
+            distance = np.hypot(*(truth.positions - poses[agent_id]).T)
+            # argmin returns the first minimum: equal distances go to the lower id's row.
+            pick = int(np.argmin(np.where(free, distance, np.inf)))
+            sweeper.target, sweeper.since = int(truth.ids[pick]), row
+            followed.add(sweeper.target)
+
+
+def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int] = None,
+                     follow: bool = False, follow_limit: Optional[int] = None) -> SwarmRun:
+    """Run the oracle sweep (follow: sweep-and-track) over the scenario's truth (docstring).
+
+    follow_limit: the most steps an agent follows one target (None: until it dies).
+
+    Records as the in-process swarm's. The truth is the World's, so for a seed the oracle meets
+    the same targets as every policy. final_density is the coverage (1 where some square has
+    been).
     """
     steps = steps or scenario.steps
     started = time.perf_counter()
@@ -113,21 +186,44 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams,
     speed = sweep_speed(params)
     ends = lane_ends(params)
     starts = {a.agent_id: a.start for a in scenario.agents}
-    paths = {agent_id: sweep_positions(starts[agent_id], sweep_cycle(lanes, ends), speed, steps)
-             for agent_id, lanes in zip(ids, strip_lanes(params, len(ids)))}
+    team = {agent_id: _Sweeper(starts[agent_id], sweep_cycle(lanes, ends), speed, steps)
+            for agent_id, lanes in zip(ids, strip_lanes(params, len(ids)))}
     side = params.sensor.square_side
+    limit = np.inf if follow_limit is None else follow_limit
+    released = set()
     records = []
     for row in range(steps):
         truth = world.truth()
         poses = world.poses()
+        if follow:
+            alive = set(truth.ids.tolist())
+            for agent_id, sweeper in team.items():
+                if sweeper.target is None:
+                    continue
+                if row - sweeper.since >= limit:
+                    released.add(sweeper.target)
+                elif sweeper.target in alive:
+                    continue
+                sweeper.resume(poses[agent_id], steps - row)
+            _assign_followers(team, truth, poses, side, row, released)
         records.append(StepRecord(
             step=world.step, truth_ids=truth.ids, truth_positions=truth.positions,
-            agent_poses=poses, modes={a: MODE for a in ids},
+            agent_poses=poses,
+            modes={a: MODE if team[a].target is None else FOLLOW_MODE for a in ids},
             estimates={a: truth.positions[in_sensing_square(truth.positions, poses[a], side)]
                        for a in ids},
             searched_fraction=world.searched_fraction()))
         if row + 1 < steps:
-            world.place_agents({a: paths[a][row + 1] for a in ids})
+            world.place_agents({a: _next_position(team[a], poses[a], truth, speed, params)
+                                for a in ids})
         world.advance()
     return SwarmRun(scenario, records, world.coverage.astype(float),
                     time.perf_counter() - started)
+
+
+def _next_position(sweeper: _Sweeper, pose, truth, speed: float,
+                   params: SatParams) -> np.ndarray:
+    if sweeper.target is None:
+        return sweeper.next_sweep_position()
+    (row,) = np.flatnonzero(truth.ids == sweeper.target)
+    return follow_position(pose, truth.states[row], speed, params)

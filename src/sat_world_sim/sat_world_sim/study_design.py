@@ -20,8 +20,9 @@ further dotted parameters (``overrides``, e.g. ``additions.confirmation: False``
 Cells per setting (``policy_cells``): SAT-PHD cooperative (config/paper.yaml; the reference of
 every paired comparison), SAT-PHD strict (config/paper_strict.yaml, the paper as written), no
 radio (C_R = 0), lawnmower, random walk, SAT-PHD with OR-Tools walks, the oracle sweep
-(oracle_sweep.py, the ceiling) and issue 15's cells: the persistent profile
-(config/persistent.yaml) and the PHD-Voronoi and Thompson-sampling PHD baselines
+(oracle_sweep.py, the ceiling), the oracle sweep-and-track (the same oracle following what it
+sees: a reference for the tracked share, not a ceiling) and issue 15's cells: the persistent
+profile (config/persistent.yaml) and the PHD-Voronoi and Thompson-sampling PHD baselines
 (``search.policy`` FIELD_BASELINES). The ablation (``ablation_cells``): the default profile with
 each addition to the paper switched off alone, one cell per bool field of the parameter group
 ``additions`` (sat_agent.config) that is on by default, so the study follows the core without a
@@ -37,16 +38,16 @@ Designs (``DESIGNS``): ``default`` is what ``make evaluate`` runs, chosen to fit
 factorial. ``--only SETTING/LABEL`` picks cells from all of them. Measured CPU seconds per
 200-step run (evaluation.csv's ``cpu_time_s``, seeds 1-4, with the core of issue 14's
 additions; the machine shared, so ±20 %): SAT-PHD 2.7 at the paper setting, 2.1 at
-paper_random, 6-7 at random; the strict profile and the ablation cells like SAT-PHD
-(1.7-2.3 at paper_random); lawnmower, random walk and no radio 2.2-2.5 and 4.3-7.3;
-OR-Tools walks 3.1 and 9.7; 8 agents 12.8; the oracle sweep 0.1. The default design: at
-paper, cooperative, strict and oracle; at paper_random, every policy cell and the ablation
-(10 additions); at random, every policy cell; the policy cells include OR-Tools walks (issue
-15 names them among the baselines the persistent profile must lead). 1650 runs took 41.8 min
-on an idle machine (``evaluate --dry-run`` prints the estimate from the last study's costs).
-Not in it, reachable with ``--design full`` or ``--only``: the paper setting's other
-policies, the ablation at paper and random (+22 min at random), the persistent profile's
-ablation at random (4 cells, ~+12 min) and the sweeps (+18 min).
+paper_random, 6-7 at random; the strict profile and the ablation cells like SAT-PHD (1.7-2.3 at
+paper_random); lawnmower, random walk and no radio 2.2-2.5 and 4.3-7.3; OR-Tools walks 3.1 and
+9.7; 8 agents 12.8; the oracle sweep 0.1, sweep-and-track 0.2. The default design: at paper,
+cooperative, strict and the two oracles; at paper_random, every policy cell and the ablation
+(10 additions); at random, every policy cell; the policy cells include OR-Tools walks (issue 15
+names them among the baselines the persistent profile must lead). 1800 runs took 42.1 min on an
+idle machine (``evaluate --dry-run`` prints the estimate from the last study's costs). Not in
+it, reachable with ``--design full`` or ``--only``: the paper setting's other policies, the
+ablation at paper and random (+22 min at random), the persistent profile's ablation at random
+(4 cells, ~+12 min) and the sweeps (+18 min).
 
 Cells that cannot be built on this checkout (a profile file that does not exist yet, a policy
 or parameter the core does not know yet, e.g. on an older checkout) are skipped with a
@@ -80,6 +81,8 @@ REFERENCE_PROFILE = 'paper'
 STRICT_PROFILE = 'paper_strict'
 PERSISTENT_PROFILE = 'persistent'
 ORACLE = 'oracle_sweep'
+ORACLE_TRACK = 'oracle_sweep_track'
+ORACLES = (ORACLE, ORACLE_TRACK)
 ADDITIONS_GROUP = 'additions'
 # search.policy names of issue 15's baselines from the field (PHD-weighted Voronoi, Dames 2020;
 # Thompson sampling, Banerjee & Schneider 2024; sat_agent/baselines/).
@@ -88,6 +91,7 @@ FIELD_BASELINES = ('phd_voronoi', 'thompson')
 REFERENCE_LABEL = 'SAT-PHD (cooperative)'
 STRICT_LABEL = 'SAT-PHD strict (paper as written)'
 ORACLE_LABEL = 'oracle sweep'
+ORACLE_TRACK_LABEL = 'oracle sweep-and-track'
 PERSISTENT_LABEL = 'SAT-PHD persistent'
 
 
@@ -129,8 +133,8 @@ class Cell:
 
     @property
     def is_oracle(self) -> bool:
-        """Whether this is the oracle sweep (no agents' filter, oracle_sweep.py)."""
-        return self.policy == ORACLE
+        """Whether this is an oracle: the sweep or sweep-and-track (no filter, oracle_sweep.py)."""
+        return self.policy in ORACLES
 
     @property
     def is_reference_kind(self) -> bool:
@@ -171,7 +175,8 @@ def policy_cells(setting: str) -> List[Cell]:
              cell(setting, 'lawnmower', policy='lawnmower'),
              cell(setting, 'random walk', policy='random_walk'),
              cell(setting, 'SAT-PHD + OR-Tools', planner='ortools'),
-             cell(setting, ORACLE_LABEL, policy=ORACLE, planner='none')]
+             cell(setting, ORACLE_LABEL, policy=ORACLE, planner='none'),
+             cell(setting, ORACLE_TRACK_LABEL, policy=ORACLE_TRACK, planner='none')]
     return cells + persistent_cells(setting)
 
 
@@ -246,7 +251,8 @@ def range_label(comm_range: float) -> str:
 
 def _designs() -> Dict[str, List[Cell]]:
     paper = [default_cell('paper'), default_cell('paper', STRICT_LABEL, profile=STRICT_PROFILE),
-             default_cell('paper', ORACLE_LABEL, policy=ORACLE, planner='none')]
+             default_cell('paper', ORACLE_LABEL, policy=ORACLE, planner='none'),
+             default_cell('paper', ORACLE_TRACK_LABEL, policy=ORACLE_TRACK, planner='none')]
     fits = policy_cells('paper_random') + ablation_cells('paper_random') + policy_cells('random')
     full = (policy_cells('paper') + ablation_cells('paper') + policy_cells('paper_random')
             + ablation_cells('paper_random') + policy_cells('random') + ablation_cells('random')
@@ -336,7 +342,7 @@ def is_setting_reference(cell: Cell) -> bool:
 
 def ceiling_of(cell: Cell, cells: Sequence[Cell]) -> Optional[Cell]:
     """Return the oracle sweep of the cell's setting and team (its ceiling) among cells."""
-    return next((c for c in cells if c.is_oracle and c.setting == cell.setting
+    return next((c for c in cells if c.policy == ORACLE and c.setting == cell.setting
                  and c.agents == cell.agents), None)
 
 
@@ -351,7 +357,7 @@ def rivals_of(cell: Cell, cells: Sequence[Cell]) -> List[Cell]:
 
     Every other policy and profile of the cell's setting (``policy_cells``: cooperative and
     strict SAT-PHD, no radio, lawnmower, random walk, OR-Tools walks, PHD-Voronoi, Thompson
-    sampling), not the oracle sweep: a ceiling, not a policy (it sees the truth).
+    sampling), not the two oracles: references, not policies (they see the truth).
     """
     policies = [c for c in policy_cells(cell.setting)
                 if not c.is_oracle and c != replace(cell, steps=STEPS)]

@@ -1,0 +1,55 @@
+import csv
+from pathlib import Path
+import runpy
+
+import pytest
+
+from sat_agent.config import load_params_file
+from sat_world_sim.evaluate import METRICS, run_one
+from sat_world_sim.scenario import load_scenario
+from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE_TRACK
+from sat_world_sim.study_design import ORACLE_TRACK_LABEL, PERSISTENT_LABEL, PERSISTENT_PROFILE
+
+REPO = Path(__file__).resolve().parents[1]
+FRONTIER = runpy.run_path(str(REPO / 'scripts' / 'oracle_frontier.py'))
+
+
+def write_rows(path: Path, cells_values) -> None:
+    """Write an evaluation.csv with one row per (cell, seed, {metric: value})."""
+    with open(path, 'w', newline='') as stream:
+        writer = csv.DictWriter(stream, fieldnames=CONFIG_COLUMNS + ('seed',) + METRICS,
+                                restval='')
+        writer.writeheader()
+        for cell, seed, values in cells_values:
+            writer.writerow(dict(cell.columns(), seed=seed, **values))
+
+
+def test_the_frontier_without_a_limit_is_the_evaluation_cell_and_the_paired_lines(
+        tmp_path, capsys):
+    oracle = default_cell('random', ORACLE_TRACK_LABEL, policy=ORACLE_TRACK, planner='none')
+    persistent = default_cell('random', PERSISTENT_LABEL, profile=PERSISTENT_PROFILE)
+    paper = load_scenario(REPO / 'config' / 'scenarios' / 'paper.yaml')
+    params = oracle.params(load_params_file(REPO / 'config' / 'paper.yaml'))
+    rows = [run_one(oracle, seed, params, paper)['row'] for seed in (1, 2)]
+    point = FRONTIER['frontier_point']('random', (1, 2), None)
+    for name in ('detected_share', 'tracked_share', 'mean_ospa'):
+        assert point[name] == pytest.approx(sum(r[name] for r in rows) / 2)
+    # Persistent 0.1 below the oracle on every seed and metric: the paired difference is -0.1.
+    csv_path = tmp_path / 'evaluation.csv'
+    write_rows(csv_path, [(oracle, r['seed'], {m: r[m] for m in METRICS}) for r in rows]
+               + [(persistent, r['seed'], {m: r[m] - 0.1 for m in METRICS}) for r in rows])
+    assert FRONTIER['main'](['--seeds', '2', '--limits', '0', 'none', '--csv',
+                             str(csv_path)]) == 0
+    out = capsys.readouterr().out
+    assert '| 0 | ' in out and '| none (until it dies) | ' in out
+    assert f'{100 * point["tracked_share"]:.1f}' in out
+    assert out.count('difference -0.100 [-0.100, -0.100]') == 3
+
+
+def test_the_frontier_refuses_a_negative_limit_and_says_when_rows_are_missing(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        FRONTIER['main'](['--limits', '-1'])
+    assert 'must be >= 0 or none' in capsys.readouterr().err
+    lines = FRONTIER['persistent_against_the_oracle']('random', tmp_path / 'none.csv')
+    assert lines == [f'{tmp_path / "none.csv"}: no {PERSISTENT_LABEL} or {ORACLE_TRACK_LABEL} '
+                     f'({ORACLE_TRACK}) rows at random']
