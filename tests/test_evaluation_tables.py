@@ -114,3 +114,25 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     fresh = f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}'
     assert readme.read_text() == f'# Title\n{fresh}\nrest\n'
     assert (out / 'evaluation_summary.md').read_text() == f'# Summary\n\n{fresh}\n\n## Per cell\n'
+
+
+def test_the_persistent_ablation_is_paired_with_the_persistent_profile(tmp_path):
+    from sat_world_sim.study_design import persistent_ablation_cells, reference_of
+    ablated = persistent_ablation_cells('random')
+    assert all(reference_of(c, [REFERENCE, PERSISTENT] + ablated) == PERSISTENT
+               for c in ablated)
+    # Without the persistent profile among the cells there is nothing to pair them with.
+    assert reference_of(ablated[0], [REFERENCE] + ablated) is None
+    first = ablated[0]
+    rows = ([result(PERSISTENT, seed)['row'] for seed in SEEDS]
+            + [dict(result(PERSISTENT, seed)['row'], label=first.label,
+                    overrides=first.columns()['overrides'],
+                    detected_share=detected(PERSISTENT, seed) - 0.05) for seed in SEEDS])
+    tables = study_tables([PERSISTENT, first], rows)
+    assert 'Δ to the persistent profile' in tables
+    assert line(tables, 3, first.label).split(' | ')[3].startswith('56 (−5 [−5, −5]*')
+    # Only the ablation ran (evaluate --only): its figure, no main-table figures, no error.
+    results = [{'row': row, 'cell': cell, 'ospa': np.full(10, 5.0),
+                'searched': np.linspace(0, 50, 10), 'targets': []}
+               for row, cell in zip(rows, [PERSISTENT] * 20 + [first] * 20)][20:]
+    assert write_figures([first], results, tmp_path) == []

@@ -24,6 +24,7 @@ import numpy as np  # noqa: E402
 from sat_world_sim.evaluation_tables import by_seed, table_cells  # noqa: E402
 from sat_world_sim.paired_statistics import paired_difference, paired_values  # noqa: E402
 from sat_world_sim.study_design import default_cell, is_setting_reference  # noqa: E402
+from sat_world_sim.study_design import PERSISTENT_PROFILE  # noqa: E402
 from sat_world_sim.study_design import reference_of, SETTINGS, UNLIMITED  # noqa: E402
 
 
@@ -31,8 +32,10 @@ def write_figures(cells, results: Sequence[dict], out_dir) -> List[Path]:
     """Write the figures of the cells that ran into out_dir; return their paths."""
     out = Path(out_dir)
     parts = table_cells(cells)
-    paths = [_time_figure(parts['main'], results, out / 'evaluation_time.png'),
-             _detection_figure(parts['main'], results, out / 'evaluation_detection.png')]
+    paths = []
+    if parts['main']:
+        paths += [_time_figure(parts['main'], results, out / 'evaluation_time.png'),
+                  _detection_figure(parts['main'], results, out / 'evaluation_detection.png')]
     if len(parts['ablation']) > 1:
         paths.append(_ablation_figure(parts['ablation'], cells, results,
                                       out / 'evaluation_ablation.png'))
@@ -112,8 +115,11 @@ def _ablation_figure(chosen, cells, results, path: Path) -> Path:
             axis.invert_yaxis()   # top to bottom in the ablation table's order
             axis.set_xlabel(unit)
             axis.set_title(SETTINGS[setting].title, fontsize=9)
-    figure.suptitle('Paired difference to SAT-PHD (cooperative), 95 % bootstrap CI over seeds '
-                    '(red: Wilcoxon p < 0.01)', fontsize=10)
+    persistent = any(c.profile == PERSISTENT_PROFILE for c in chosen)
+    figure.suptitle('Paired difference to SAT-PHD (cooperative'
+                    + ("; the persistent profile's ablation: to SAT-PHD persistent"
+                       if persistent else '')
+                    + '), 95 % bootstrap CI over seeds (red: Wilcoxon p < 0.01)', fontsize=10)
     return _save(figure, path)
 
 

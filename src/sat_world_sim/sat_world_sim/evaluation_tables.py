@@ -23,7 +23,8 @@ import numpy as np
 from sat_world_sim.paired_statistics import ALPHA, paired_difference, paired_values
 from sat_world_sim.paired_statistics import ratio_of_means
 from sat_world_sim.study_design import ADDITIONS_GROUP, ceiling_of, Cell, factorial_cells
-from sat_world_sim.study_design import is_persistent, is_setting_reference, reference_of
+from sat_world_sim.study_design import is_persistent, is_setting_reference, PERSISTENT_PROFILE
+from sat_world_sim.study_design import reference_of
 from sat_world_sim.study_design import rivals_of, STRICT_PROFILE
 from sat_world_sim.study_design import sweep_cells
 
@@ -162,9 +163,13 @@ def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
                    'policy and profile of its setting (issue 15), paired by seed; the oracle '
                    'sweep is its ceiling above.', '', rivals]
     if parts['ablation']:
+        persistent = any(c.profile == PERSISTENT_PROFILE for c in parts['ablation'])
         blocks += ['', 'Ablation: the default profile (config/paper.yaml) with each addition to '
                    'the paper switched off alone, and the strict profile '
-                   '(config/paper_strict.yaml).', '',
+                   '(config/paper_strict.yaml).' + (
+                       ' The persistent profile with each of its own additions off alone: Δ '
+                       'to the persistent profile (config/persistent.yaml).' if persistent
+                       else ''), '',
                    paired_table(parts['ablation'], rows, ABLATION, cells, ceiling=False)]
     if parts['sweeps']:
         blocks += ['', 'Sweeps: cooperative SAT-PHD around the random default, one factor '

@@ -58,7 +58,8 @@ cooperative SAT-PHD (profile ``paper``, policy ``sat``, greedy walks, no overrid
 cooperative SAT-PHD cell of the same setting with the same team, clutter and radio range if
 there is one (the factorial's policies at each of its combinations); else the setting's
 cooperative SAT-PHD cell at its default team, clutter and range (policies, ablation, sweeps,
-the factorial's SAT-PHD cells). That one has no reference.
+the factorial's SAT-PHD cells). That one has no reference. The persistent profile's ablation
+cells are compared with the persistent profile of their setting (none when it did not run).
 """
 
 from dataclasses import dataclass, fields, replace
@@ -327,6 +328,8 @@ def reference_of(cell: Cell, cells: Sequence[Cell]) -> Optional[Cell]:
     """Return the cell it is compared with (module docstring); None for a setting's reference."""
     if is_setting_reference(cell):
         return None
+    if replace(cell, steps=STEPS) in persistent_ablation_cells(cell.setting):
+        return next((c for c in cells if is_persistent(c) and c.setting == cell.setting), None)
     same = [c for c in cells if c.is_reference_kind and not cell.is_reference_kind
             and c.setting == cell.setting
             and (c.agents, c.clutter, c.comm_range) == (cell.agents, cell.clutter,
