@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 from sat_world_sim.evaluation_tables import by_seed, table_cells  # noqa: E402
 from sat_world_sim.paired_statistics import paired_difference, paired_values  # noqa: E402
 from sat_world_sim.study_design import default_cell, is_setting_reference  # noqa: E402
-from sat_world_sim.study_design import PERSISTENT_PROFILE  # noqa: E402
+from sat_world_sim.study_design import is_persistent_ablation  # noqa: E402
 from sat_world_sim.study_design import reference_of, SETTINGS, UNLIMITED  # noqa: E402
 
 
@@ -115,7 +115,7 @@ def _ablation_figure(chosen, cells, results, path: Path) -> Path:
             axis.invert_yaxis()   # top to bottom in the ablation table's order
             axis.set_xlabel(unit)
             axis.set_title(SETTINGS[setting].title, fontsize=9)
-    persistent = any(c.profile == PERSISTENT_PROFILE for c in chosen)
+    persistent = any(map(is_persistent_ablation, chosen))
     figure.suptitle('Paired difference to SAT-PHD (cooperative'
                     + ("; the persistent profile's ablation: to SAT-PHD persistent"
                        if persistent else '')

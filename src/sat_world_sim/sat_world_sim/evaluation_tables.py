@@ -23,7 +23,7 @@ import numpy as np
 from sat_world_sim.paired_statistics import ALPHA, paired_difference, paired_values
 from sat_world_sim.paired_statistics import ratio_of_means
 from sat_world_sim.study_design import ADDITIONS_GROUP, ceiling_of, Cell, factorial_cells
-from sat_world_sim.study_design import is_persistent, is_setting_reference, PERSISTENT_PROFILE
+from sat_world_sim.study_design import is_persistent, is_persistent_ablation, is_setting_reference
 from sat_world_sim.study_design import reference_of
 from sat_world_sim.study_design import rivals_of, STRICT_PROFILE
 from sat_world_sim.study_design import sweep_cells
@@ -163,7 +163,7 @@ def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
                    'policy and profile of its setting (issue 15), paired by seed; the oracle '
                    'sweep is its ceiling above.', '', rivals]
     if parts['ablation']:
-        persistent = any(c.profile == PERSISTENT_PROFILE for c in parts['ablation'])
+        persistent = any(map(is_persistent_ablation, parts['ablation']))
         blocks += ['', 'Ablation: the default profile (config/paper.yaml) with each addition to '
                    'the paper switched off alone, and the strict profile '
                    '(config/paper_strict.yaml).' + (

@@ -44,7 +44,7 @@ from typing import List, Optional
 import numpy as np
 
 from sat_agent.config import SatParams
-from sat_agent.motion_model import positions
+from sat_agent.motion_model import POSITION, VELOCITY
 from sat_agent.search_map import SearchMap
 from sat_agent.sensor_model import in_sensing_square
 
@@ -120,10 +120,9 @@ def follow_position(pose, state, speed: float, params: SatParams) -> np.ndarray:
 
     state: the target's [x, vx, y, vy] (motion_model order).
     """
-    pose = np.asarray(pose, dtype=float)
+    pose, state = np.asarray(pose, dtype=float), np.asarray(state, dtype=float)
     area = params.area
-    aim = positions(np.asarray(state, dtype=float)[None, :])[0]
-    aim = aim + params.motion.dt * np.asarray(state, dtype=float)[[1, 3]]
+    aim = state[list(POSITION)] + params.motion.dt * state[list(VELOCITY)]
     aim = np.clip(aim, (0.0, 0.0), (area.width, area.height))
     offset = aim - pose
     length = float(np.hypot(*offset))

@@ -328,7 +328,7 @@ def reference_of(cell: Cell, cells: Sequence[Cell]) -> Optional[Cell]:
     """Return the cell it is compared with (module docstring); None for a setting's reference."""
     if is_setting_reference(cell):
         return None
-    if replace(cell, steps=STEPS) in persistent_ablation_cells(cell.setting):
+    if is_persistent_ablation(cell):
         return next((c for c in cells if is_persistent(c) and c.setting == cell.setting), None)
     same = [c for c in cells if c.is_reference_kind and not cell.is_reference_kind
             and c.setting == cell.setting
@@ -347,6 +347,11 @@ def ceiling_of(cell: Cell, cells: Sequence[Cell]) -> Optional[Cell]:
     """Return the oracle sweep of the cell's setting and team (its ceiling) among cells."""
     return next((c for c in cells if c.policy == ORACLE and c.setting == cell.setting
                  and c.agents == cell.agents), None)
+
+
+def is_persistent_ablation(cell: Cell) -> bool:
+    """Whether the cell is the persistent profile with one of its own additions off."""
+    return replace(cell, steps=STEPS) in persistent_ablation_cells(cell.setting)
 
 
 def is_persistent(cell: Cell) -> bool:
