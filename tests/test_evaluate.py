@@ -116,10 +116,27 @@ def test_ablation_cells_follow_the_fields_of_the_additions_group(monkeypatch):
                                             (('additions.track_standoff', False),)]
     assert all(reference_of(c, cells + [default_cell('random')]) == default_cell('random')
                for c in cells)
-    # The additions off by default are the persistent profile's: its ablation switches them off.
-    (persistent,) = persistent_ablation_cells('random')
-    assert (persistent.profile, persistent.overrides) == (
-        'persistent', (('additions.persistent_planning', False),))
+    # The additions off by default are the persistent profile's: its ablation switches each
+    # both ways, and building the cells drops the way the profile already is.
+    without, with_ = persistent_ablation_cells('random')
+    assert [(c.profile, c.overrides) for c in (without, with_)] == [
+        ('persistent', (('additions.persistent_planning', False),)),
+        ('persistent', (('additions.persistent_planning', True),))]
+
+
+def test_the_persistent_ablation_skips_the_way_the_profile_already_is():
+    cells = persistent_ablation_cells('random')
+    runnable, skipped = prepare_cells(cells, CONFIG)
+    profile = load_params_file(CONFIG / 'persistent.yaml').additions
+    names = study_design.addition_names(default=False)
+    assert len(runnable) == len(skipped) == len(names) > 0
+    for cell, params in runnable:
+        ((key, value),) = cell.overrides
+        name = key.split('.')[1]
+        assert value is not getattr(profile, name)
+        assert cell.label.endswith(f"{'with' if value else 'without'} {name}")
+        assert getattr(params.additions, name) is value
+    assert all('already so' in reason for _, reason in skipped)
 
 
 def test_cells_that_cannot_be_built_yet_are_skipped_with_the_reason(tmp_path):

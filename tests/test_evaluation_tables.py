@@ -1,6 +1,7 @@
 import numpy as np
 
-from sat_world_sim.evaluate import main, METRICS, TABLE_MARKERS, write_csv
+from sat_world_sim.evaluate import cells_of, COSTS, main, METRICS, PER_CELL, row_sections
+from sat_world_sim.evaluate import TABLE_MARKERS, write_csv
 from sat_world_sim.evaluation_plots import write_figures
 from sat_world_sim.evaluation_tables import rivals_table, study_tables, table_cells
 from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE, ORACLE_LABEL
@@ -105,7 +106,9 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     rows = [result(cell, seed)['row'] for cell in cells for seed in SEEDS]
     write_csv(rows, out / 'evaluation.csv', CONFIG_COLUMNS + ('seed',) + METRICS)
     stale = f'{TABLE_MARKERS[0]}\nold\n{TABLE_MARKERS[1]}'
-    (out / 'evaluation_summary.md').write_text(f'# Summary\n\n{stale}\n\n## Per cell\n')
+    (out / 'evaluation_summary.md').write_text(
+        f'# Summary\n\n{stale}\n\n## {PER_CELL}\n\nold\n\n## Cells skipped\n\n- none\n\n'
+        f'## {COSTS}\n\nold\n')
     readme = tmp_path / 'README.md'
     readme.write_text(f'# Title\n{stale}\nrest\n')
     assert main(['--tables-only', '--out', str(out), '--readme', str(readme)]) == 0
@@ -113,7 +116,11 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     assert capsys.readouterr().out.strip() == tables
     fresh = f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}'
     assert readme.read_text() == f'# Title\n{fresh}\nrest\n'
-    assert (out / 'evaluation_summary.md').read_text() == f'# Summary\n\n{fresh}\n\n## Per cell\n'
+    # The summary's sections made from the rows are written again; the cells skipped are not.
+    sections = row_sections(cells_of(rows), rows)
+    assert (out / 'evaluation_summary.md').read_text() == (
+        f'# Summary\n\n{fresh}\n\n## {PER_CELL}\n\n{sections[PER_CELL]}\n\n'
+        f'## Cells skipped\n\n- none\n\n## {COSTS}\n\n{sections[COSTS]}\n')
 
 
 def test_the_persistent_ablation_is_paired_with_the_persistent_profile(tmp_path):

@@ -267,7 +267,8 @@ class CooperationParams:
     track_edge_margin: float = param(
         1.5, "additions.track_standoff: and this far inside the square's edge (m)", low=0)
     # Dev seeds 2001-2030 (random default): 0.1 / 0.3 / 0.5 gave detected 0.61 / 0.66 / 0.64,
-    # entered 0.69 / 0.76 / 0.78, tracked 0.31 / 0.32 / 0.27, OSPA 6.76 / 6.70 / 7.06 m.
+    # entered 0.69 / 0.76 / 0.78, tracked 0.31 / 0.32 / 0.27, OSPA 6.76 / 6.70 / 7.06 m. The
+    # persistent profile leaves the addition off (config/persistent.yaml says why).
     track_search_tolerance: float = param(
         0.3, 'additions.search_while_tracking: epsilon, the share of the best Renyi divergence '
         '(Eqn. track_control) a tracking agent may give up to cover search worth', low=0,

@@ -19,7 +19,8 @@ Outputs in ``--out`` (docs/ by default): evaluation.csv (one row per run: CONFIG
 METRICS), evaluation_targets.csv (one row per target), evaluation_summary.md (every table and
 how the study was made) and the figures; ``--readme`` writes the README's tables between its
 markers. ``--tables-only`` runs nothing: it writes the tables of ``--out``'s evaluation.csv
-again, into that summary and ``--readme`` (after a change to the tables, not to the runs).
+again, into that summary (with its per-cell and cost sections) and ``--readme`` (after a change
+to the tables, or to rows merged from runs made apart).
 
     evaluate [--design default|full|factorial] [--only SETTING/LABEL ...] [--seeds 50]
              [--first-seed 1] [--jobs N] [--scheduler local|tcp://HOST:PORT] [--out docs]
@@ -39,7 +40,7 @@ import os
 from pathlib import Path
 import sys
 import time
-from typing import Iterator, List, Optional, Sequence, Tuple
+from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 from tqdm import tqdm
@@ -225,27 +226,50 @@ def cost_table(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
              '| --- | --- |']
     for cell in cells:
         mine = [r for r in rows if r['setting'] == cell.setting and r['label'] == cell.label]
+        # float(): rows read back from a CSV (--tables-only) hold strings.
         lines.append(f'| {cell.setting} | {cell.label} | {len(mine)} | '
-                     f"{np.mean([r['cpu_time_s'] for r in mine]):.2f} | "
-                     f"{np.mean([r['wall_time_s'] for r in mine]):.2f} |")
+                     f"{np.mean([float(r['cpu_time_s']) for r in mine]):.2f} | "
+                     f"{np.mean([float(r['wall_time_s']) for r in mine]):.2f} |")
     return '\n'.join(lines)
+
+
+# The summary's sections computed from the rows, which --tables-only writes again too.
+PER_CELL, COSTS = 'Mean ± std per cell', 'Cost per run'
+
+
+def row_sections(cells: Sequence[Cell], rows: Sequence[dict]) -> Dict[str, str]:
+    """Return the bodies of the summary's sections that come from the rows alone."""
+    from sat_world_sim.evaluation_tables import summary_table
+
+    return {PER_CELL: summary_table(cells, rows), COSTS: cost_table(cells, rows)}
 
 
 def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, tables: str,
                   skipped: Sequence[Tuple[Cell, str]], seconds: float, command: str) -> None:
     """Write evaluation_summary.md: how the study was made, every table, what was skipped."""
-    from sat_world_sim.evaluation_tables import summary_table
-
     skipped_text = ''.join(f'- {cell.name}: {reason}\n' for cell, reason in skipped) or '- none\n'
+    sections = row_sections(cells, rows)
     path.write_text(
         '# Evaluation summary\n\n'
         f'{len(rows)} runs in {seconds / 60:.1f} min on {os.cpu_count()} cores, made by '
         f'`{command}` (`make evaluate` regenerates the default study); one row per run in '
         'evaluation.csv, the design in `sat_world_sim/study_design.py`.\n\n'
         f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}\n\n'
-        f'## Mean ± std per cell\n\n{summary_table(cells, rows)}\n\n'
+        f'## {PER_CELL}\n\n{sections[PER_CELL]}\n\n'
         f'## Cells skipped\n\n{skipped_text}\n'
-        f'## Cost per run\n\n{cost_table(cells, rows)}\n', encoding='utf-8')
+        f'## {COSTS}\n\n{sections[COSTS]}\n', encoding='utf-8')
+
+
+def replace_section(text: str, title: str, body: str) -> str:
+    """Return text with the body of its section '## title' (up to the next one) replaced."""
+    head = f'## {title}\n\n'
+    start = text.find(head)
+    if start < 0:
+        return text
+    start += len(head)
+    end = text.find('\n\n## ', start)
+    end = len(text.rstrip('\n')) if end < 0 else end
+    return text[:start] + body + text[end:]
 
 
 # Around the tables in the README and in evaluation_summary.md.
@@ -276,15 +300,25 @@ def cells_of(rows: Sequence[dict]) -> List[Cell]:
 
 
 def rewrite_tables(out: Path, readme: Optional[str]) -> str:
-    """Write the tables of out/evaluation.csv into its summary and the README (--tables-only)."""
+    """Write the tables of out/evaluation.csv into its summary and the README (--tables-only).
+
+    In the summary, the sections that come from the rows (row_sections) are written again too;
+    how the study was made and the cells skipped stay as they are.
+    """
     from sat_world_sim.evaluation_tables import study_tables
 
     rows = read_rows(out / 'evaluation.csv')
     if not rows:
         raise ValueError(f'{out / "evaluation.csv"}: no runs to tabulate')
-    tables = study_tables(cells_of(rows), rows)
+    cells = cells_of(rows)
+    tables = study_tables(cells, rows)
     for path in [out / 'evaluation_summary.md'] + ([Path(readme)] if readme else []):
         update_readme(path, tables)
+    summary = out / 'evaluation_summary.md'
+    text = summary.read_text(encoding='utf-8')
+    for title, body in row_sections(cells, rows).items():
+        text = replace_section(text, title, body)
+    summary.write_text(text, encoding='utf-8')
     return tables
 
 

@@ -167,8 +167,10 @@ def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
         blocks += ['', 'Ablation: the default profile (config/paper.yaml) with each addition to '
                    'the paper switched off alone, and the strict profile '
                    '(config/paper_strict.yaml).' + (
-                       ' The persistent profile with each of its own additions off alone: Δ '
-                       'to the persistent profile (config/persistent.yaml).' if persistent
+                       ' The persistent profile with each addition that is off by default '
+                       'switched the other way alone (off the ones it switches on, on the ones '
+                       'it leaves off): Δ to the persistent profile (config/persistent.yaml).'
+                       if persistent
                        else ''), '',
                    paired_table(parts['ablation'], rows, ABLATION, cells, ceiling=False)]
     if parts['sweeps']:

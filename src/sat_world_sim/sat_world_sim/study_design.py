@@ -27,7 +27,9 @@ profile (config/persistent.yaml) and the PHD-Voronoi and Thompson-sampling PHD b
 each addition to the paper switched off alone, one cell per bool field of the parameter group
 ``additions`` (sat_agent.config) that is on by default, so the study follows the core without a
 second list; the persistent profile's ablation (``persistent_ablation_cells``, in ``full``):
-that profile with each of the additions it switches on (those off by default) off alone. Sweeps
+that profile with each addition that is off by default switched the other way alone, "without"
+the ones it switches on and "with" the ones it leaves off (both cells are listed;
+``prepare_cells`` skips the one that is the profile itself). Sweeps
 around the random default (``sweep_cells``): 2 or 8 agents, lambda 0 or 30, C_R 25 m or
 unlimited. The factorial (``factorial_cells``): agents {2, 4, 8} x lambda {0, 10, 30} x
 C_R {0, 25, 50, unlimited} x the policies of FACTORIAL_POLICIES at the random setting, plus the
@@ -43,8 +45,8 @@ paper_random); lawnmower, random walk and no radio 2.2-2.5 and 4.3-7.3; OR-Tools
 9.7; 8 agents 12.8; the oracle sweep 0.1, sweep-and-track 0.2. The default design: at paper,
 cooperative, strict and the two oracles; at paper_random, every policy cell and the ablation
 (10 additions); at random, every policy cell; the policy cells include OR-Tools walks (issue 15
-names them among the baselines the persistent profile must lead). 1800 runs took 42.1 min on an
-idle machine (``evaluate --dry-run`` prints the estimate from the last study's costs). Not in
+names them among the baselines the persistent profile must lead). 1800 runs took 37.6-42.1 min
+on an idle machine (``evaluate --dry-run`` prints the estimate from the last study's costs). Not in
 it, reachable with ``--design full`` or ``--only``: the paper setting's other policies, the
 ablation at paper and random (+22 min at random), the persistent profile's ablation at random
 (4 cells, ~+12 min) and the sweeps (+18 min).
@@ -208,11 +210,15 @@ def ablation_cells(setting: str) -> List[Cell]:
 
 
 def persistent_ablation_cells(setting: str) -> List[Cell]:
-    """Return the persistent profile with each of its own additions off alone (docstring)."""
-    return [default_cell(setting, f'{PERSISTENT_LABEL} without {name}',
+    """Return the persistent profile with each addition off by default switched alone.
+
+    Both ways for each (module docstring): the profile's yaml decides which one is a no-op.
+    """
+    return [default_cell(setting, f'{PERSISTENT_LABEL} {word} {name}',
                          profile=PERSISTENT_PROFILE,
-                         overrides=((f'{ADDITIONS_GROUP}.{name}', False),))
-            for name in addition_names(default=False)]
+                         overrides=((f'{ADDITIONS_GROUP}.{name}', value),))
+            for name in addition_names(default=False)
+            for word, value in (('without', False), ('with', True))]
 
 
 def sweep_cells() -> List[Cell]:
@@ -350,7 +356,7 @@ def ceiling_of(cell: Cell, cells: Sequence[Cell]) -> Optional[Cell]:
 
 
 def is_persistent_ablation(cell: Cell) -> bool:
-    """Whether the cell is the persistent profile with one of its own additions off."""
+    """Whether the cell is the persistent profile with one addition switched the other way."""
     return replace(cell, steps=STEPS) in persistent_ablation_cells(cell.setting)
 
 
