@@ -1,9 +1,13 @@
+from dataclasses import replace
+
 import numpy as np
 
 from sat_world_sim.evaluate import cells_of, COSTS, main, METRICS, PER_CELL, row_sections
 from sat_world_sim.evaluate import TABLE_MARKERS, write_csv
+from sat_world_sim.evaluate import TARGET_COLUMNS, TARGET_STEPS, TARGETS_CSV
 from sat_world_sim.evaluation_plots import write_figures
 from sat_world_sim.evaluation_tables import rivals_table, study_tables, table_cells
+from sat_world_sim.evaluation_tables import target_phases, target_step_table
 from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE, ORACLE_LABEL
 from sat_world_sim.study_design import PERSISTENT_LABEL, rivals_of, STRICT_LABEL
 
@@ -116,11 +120,61 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     assert capsys.readouterr().out.strip() == tables
     fresh = f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}'
     assert readme.read_text() == f'# Title\n{fresh}\nrest\n'
-    # The summary's sections made from the rows are written again; the cells skipped are not.
-    sections = row_sections(cells_of(rows), rows)
+    # The summary's sections made from the runs are written again (the target-step one, new
+    # since that summary, appended); the cells skipped are not.
+    sections = row_sections(cells_of(rows), rows, [])
+    assert TARGETS_CSV in sections[TARGET_STEPS]
     assert (out / 'evaluation_summary.md').read_text() == (
         f'# Summary\n\n{fresh}\n\n## {PER_CELL}\n\n{sections[PER_CELL]}\n\n'
-        f'## Cells skipped\n\n- none\n\n## {COSTS}\n\n{sections[COSTS]}\n')
+        f'## Cells skipped\n\n- none\n\n## {COSTS}\n\n{sections[COSTS]}\n\n'
+        f'## {TARGET_STEPS}\n\n{sections[TARGET_STEPS]}\n')
+    # With the runs' targets beside the rows, that section is their table, written in place.
+    targets = [target_row(c, seed, 1, '', 11, 21) for c in cells for seed in SEEDS]
+    write_csv(targets, out / TARGETS_CSV, TARGET_COLUMNS)
+    assert main(['--tables-only', '--out', str(out)]) == 0
+    text = (out / 'evaluation_summary.md').read_text()
+    assert text.count(f'## {TARGET_STEPS}') == 1
+    assert target_step_table(cells_of(rows), rows, targets) in text
+
+
+def target_row(cell, seed, born, died, seen, found):
+    """Return a row of evaluation_targets.csv ('' where the CSV leaves a step empty)."""
+    return {'setting': cell.setting, 'label': cell.label, 'seed': seed, 'id': 1, 'born': born,
+            'died': died, 'first_in_view': seen, 'first_detected': found}
+
+
+def test_a_targets_life_splits_before_first_view_in_view_and_after_detection():
+    def target(born, died, seen, found):
+        return target_row(REFERENCE, 1, str(born), died, seen, found)
+    # Alive over steps 10-30 (21 steps): 5 before the view at 15, 3 in view, 13 after 18.
+    assert target_phases(target(10, '30', '15', '18'), 200) == (5, 3, 13)
+    # Alive to the run's last step and never in view: all of it before the first view.
+    assert target_phases(target(10, '', '', ''), 50) == (41, 0, 0)
+    # In view at 15, never detected: the rest of its life in view, none after detection.
+    assert target_phases(target(10, '30', '15', ''), 200) == (5, 16, 0)
+    # An estimate near it before any square held it is its first detection: no view phase.
+    assert target_phases(target(10, '30', '20', '12'), 200) == (2, 0, 19)
+
+
+def test_target_step_table_pools_the_seeds_and_says_why_targets_were_missed():
+    cell = REFERENCE
+    rows = [dict(cell.columns(), seed=seed, tracked_share=share)
+            for seed, share in ((1, 0.5), (2, 0.0))]
+    targets = [
+        # Seed 1: 100 target-steps (1-100), 20 before view, 10 in view, 70 after detection;
+        # tracked 50 % of 100.
+        target_row(cell, 1, 1, '100', 21, 31),
+        # Seed 2: one never in view (steps 101-200, the run's end) and one seen, never
+        # detected (steps 1-100, in view from 51): 150 before view, 50 in view.
+        target_row(cell, 2, 101, '', '', ''),
+        target_row(cell, 2, 1, '100', 51, ''),
+        # Another cell's target does not count.
+        target_row(replace(cell, label='other'), 1, 1, '', 1, 1)]
+    table = target_step_table([cell], rows, targets)
+    # 300 target-steps: 170 before view, 60 in view, 70 after; 50 tracked, 71.4 % of after.
+    assert line(table, 0, cell.label) == (
+        f'| random | {cell.label} | 300 | 56.7 | 20.0 | 23.3 | 16.7 | 71.4 | 3 | 1 | 1 |')
+    assert target_step_table([cell], rows, []) == ''
 
 
 def test_the_persistent_ablation_is_paired_with_the_persistent_profile(tmp_path):

@@ -65,7 +65,8 @@ METRICS = ('mean_ospa', 'mean_ospa_loc', 'mean_ospa_card', 'mean_time_to_detecti
            'final_searched_pct', 'duplicate_tracking_steps', 'false_track_steps',
            'radio_msgs_per_agent_step', 'bytes_per_agent_step', 'targets_to_detect',
            'wall_time_s', 'cpu_time_s')
-# Columns of evaluation_targets.csv: the run, then metrics.json's per-target entry.
+# One row per target of every run: the run, then metrics.json's per-target entry.
+TARGETS_CSV = 'evaluation_targets.csv'
 TARGET_COLUMNS = ('setting', 'label', 'seed', 'id', 'born', 'died', 'first_in_view',
                   'first_detected', 'detection_delay', 'time_to_detection')
 METRIC_WORDS = ('ospa', 'time', 'pct', 'detect', 'bytes', 'msgs', 'steps', 'tracked', 'dup',
@@ -235,20 +236,32 @@ def cost_table(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
 
 # The summary's sections computed from the rows, which --tables-only writes again too.
 PER_CELL, COSTS = 'Mean ± std per cell', 'Cost per run'
+TARGET_STEPS = 'Where the target-steps go'
+# The summary's text before the target-step table (evaluation_tables.target_step_table).
+TARGET_STEPS_NOTE = ('Per cell, pooled over its seeds (sums over runs divided by sums): the '
+                     "share of the targets' steps alive before any sensing square held the "
+                     'target, in view but not yet detected, and after the first detection; the '
+                     'share tracked, of all and of those after a first detection; and the '
+                     'targets missed, never in a square or in one but never detected.')
 
 
-def row_sections(cells: Sequence[Cell], rows: Sequence[dict]) -> Dict[str, str]:
-    """Return the bodies of the summary's sections that come from the rows alone."""
-    from sat_world_sim.evaluation_tables import summary_table
+def row_sections(cells: Sequence[Cell], rows: Sequence[dict],
+                 targets: Sequence[dict]) -> Dict[str, str]:
+    """Return the bodies of the summary's sections that come from the runs' rows and targets."""
+    from sat_world_sim.evaluation_tables import summary_table, target_step_table
 
-    return {PER_CELL: summary_table(cells, rows), COSTS: cost_table(cells, rows)}
+    steps = target_step_table(cells, rows, targets)
+    return {PER_CELL: summary_table(cells, rows), COSTS: cost_table(cells, rows),
+            TARGET_STEPS: f'{TARGET_STEPS_NOTE}\n\n{steps}' if steps
+            else f"{TARGETS_CSV} holds none of these runs' targets."}
 
 
-def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, tables: str,
-                  skipped: Sequence[Tuple[Cell, str]], seconds: float, command: str) -> None:
+def write_summary(cells: Sequence[Cell], rows: Sequence[dict], targets: Sequence[dict],
+                  path: Path, tables: str, skipped: Sequence[Tuple[Cell, str]], seconds: float,
+                  command: str) -> None:
     """Write evaluation_summary.md: how the study was made, every table, what was skipped."""
     skipped_text = ''.join(f'- {cell.name}: {reason}\n' for cell, reason in skipped) or '- none\n'
-    sections = row_sections(cells, rows)
+    sections = row_sections(cells, rows, targets)
     path.write_text(
         '# Evaluation summary\n\n'
         f'{len(rows)} runs in {seconds / 60:.1f} min on {os.cpu_count()} cores, made by '
@@ -257,15 +270,19 @@ def write_summary(cells: Sequence[Cell], rows: Sequence[dict], path: Path, table
         f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}\n\n'
         f'## {PER_CELL}\n\n{sections[PER_CELL]}\n\n'
         f'## Cells skipped\n\n{skipped_text}\n'
-        f'## {COSTS}\n\n{sections[COSTS]}\n', encoding='utf-8')
+        f'## {COSTS}\n\n{sections[COSTS]}\n\n'
+        f'## {TARGET_STEPS}\n\n{sections[TARGET_STEPS]}\n', encoding='utf-8')
 
 
 def replace_section(text: str, title: str, body: str) -> str:
-    """Return text with the body of its section '## title' (up to the next one) replaced."""
+    """Return text with the body of its section '## title' (up to the next one) replaced.
+
+    A section the text does not have yet (a summary written before it existed) is appended.
+    """
     head = f'## {title}\n\n'
     start = text.find(head)
     if start < 0:
-        return text
+        return text.rstrip('\n') + f'\n\n{head}{body}\n'
     start += len(head)
     end = text.find('\n\n## ', start)
     end = len(text.rstrip('\n')) if end < 0 else end
@@ -308,6 +325,7 @@ def rewrite_tables(out: Path, readme: Optional[str]) -> str:
     from sat_world_sim.evaluation_tables import study_tables
 
     rows = read_rows(out / 'evaluation.csv')
+    targets = read_rows(out / TARGETS_CSV) if (out / TARGETS_CSV).exists() else []
     if not rows:
         raise ValueError(f'{out / "evaluation.csv"}: no runs to tabulate')
     cells = cells_of(rows)
@@ -316,7 +334,7 @@ def rewrite_tables(out: Path, readme: Optional[str]) -> str:
         update_readme(path, tables)
     summary = out / 'evaluation_summary.md'
     text = summary.read_text(encoding='utf-8')
-    for title, body in row_sections(cells, rows).items():
+    for title, body in row_sections(cells, rows, targets).items():
         text = replace_section(text, title, body)
     summary.write_text(text, encoding='utf-8')
     return tables
@@ -428,13 +446,13 @@ def main(argv=None) -> int:
                         progress=sys.stderr.isatty())
     rows = [r['row'] for r in results]
     write_csv(rows, out / 'evaluation.csv', CONFIG_COLUMNS + ('seed',) + METRICS)
-    write_csv([t for r in results for t in r['targets']], out / 'evaluation_targets.csv',
-              TARGET_COLUMNS)
+    targets = [t for r in results for t in r['targets']]
+    write_csv(targets, out / TARGETS_CSV, TARGET_COLUMNS)
     figures = write_figures(ran, results, out)
     tables = study_tables(ran, rows)
     seconds = time.perf_counter() - started
     given = sys.argv[1:] if argv is None else list(argv)
-    write_summary(ran, rows, out / 'evaluation_summary.md', tables, skipped, seconds,
+    write_summary(ran, rows, targets, out / 'evaluation_summary.md', tables, skipped, seconds,
                   ' '.join(['evaluate'] + given))
     if args.readme:
         update_readme(Path(args.readme), tables)

@@ -10,13 +10,17 @@
 - ``study_tables``: the README's block: legend, the main table (policies and profiles), the
   persistent profile against its rivals, the ablation (reference, strict, each addition off
   alone) and the sweeps when they ran.
+- ``target_step_table``: where the targets' steps alive go, per cell pooled over its seeds
+  (``target_phases``: before any square held the target, in view but not yet detected, after
+  its first detection), how much of the last is tracked, and why missed targets were missed
+  (never in a square, or in one but never detected); from evaluation_targets.csv.
 
 Tables, not claims: prose goes around them, written by people who read them.
 """
 
 from collections import defaultdict
 import math
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -183,6 +187,66 @@ def study_tables(cells: Sequence[Cell], rows: Sequence[dict]) -> str:
     return '\n'.join(blocks)
 
 
+def target_phases(target: dict, steps: int) -> Tuple[int, int, int]:
+    """Return a target's steps alive split in (before first view, in view, after detection).
+
+    target: a row of evaluation_targets.csv (metrics.py's per-target entry); alive from ``born``
+    to ``died``, or to the run's last step ``steps`` when ``died`` is empty. Before first
+    view: until some square first holds it or it is first detected (an estimate near a target
+    no square holds yet counts), whichever comes first; in view: from then until first
+    detected; after detection: from then on. A phase that never ends fills the rest of the life.
+    """
+    born = int(_number(target['born']))
+    end = _at(target['died'], steps)
+    detected = _at(target['first_detected'], end + 1)
+    seen = min(_at(target['first_in_view'], end + 1), detected)
+    return seen - born, detected - seen, end + 1 - detected
+
+
+def target_step_table(cells: Sequence[Cell], rows: Sequence[dict],
+                      targets: Sequence[dict]) -> str:
+    """Per cell, pooled over its seeds: where the target-steps go and why targets were missed.
+
+    Tracked target-steps of a run are its tracked_share times its target-steps (every one comes
+    after a first detection, metrics.py); pooled shares are sums over the seeds divided by sums,
+    so a long-lived target weighs more than a short one, as in tracked_share.
+    """
+    phases: Dict[tuple, np.ndarray] = defaultdict(lambda: np.zeros(3))
+    missed: Dict[str, np.ndarray] = defaultdict(lambda: np.zeros(3))
+    steps = {f"{r['setting']}/{r['label']}": int(_number(r['steps'])) for r in rows}
+    for target in targets:
+        name = f"{target['setting']}/{target['label']}"
+        if name not in steps:
+            continue
+        split = np.array(target_phases(target, steps[name]))
+        phases[name, int(_number(target['seed']))] += split
+        seen = _number(target['first_in_view']) is not None
+        if _number(target['first_detected']) is None:
+            missed[name] += [1, not seen, seen]
+        else:
+            missed[name] += [1, 0, 0]
+    header = ['setting', 'configuration', 'target-steps', 'before first view %',
+              'in view, not yet detected %', 'after first detection %', 'tracked %',
+              'tracked after first detection %', 'targets', 'missed: never in view',
+              'missed: in view, never detected']
+    lines = _header(header)
+    for cell in cells:
+        runs = [(phases[cell.name, int(_number(r['seed']))], _number(r['tracked_share']))
+                for r in rows if f"{r['setting']}/{r['label']}" == cell.name]
+        total = np.sum([split for split, _ in runs], axis=0) if runs else np.zeros(3)
+        if not total.sum():
+            continue
+        tracked = sum(split.sum() * share for split, share in runs if _finite(share))
+        count, never_seen, unconfirmed = missed[cell.name]
+        entries = [cell.setting, cell.label, f'{total.sum():.0f}']
+        entries += [_fmt(100 * part / total.sum(), 1) for part in total]
+        entries += [_fmt(100 * tracked / total.sum(), 1),
+                    _fmt(100 * tracked / total[2], 1) if total[2] else 'n/a',
+                    f'{count:.0f}', f'{never_seen:.0f}', f'{unconfirmed:.0f}']
+        lines.append(_line(entries))
+    return '\n'.join(lines) if len(lines) > 2 else ''
+
+
 def _mean_entry(values, scale: float, decimals: int) -> str:
     finite = [v for v in values.values() if _finite(v)]
     return _fmt(scale * float(np.mean(finite)), decimals) if finite else 'n/a'
@@ -240,6 +304,12 @@ def _number(value) -> Optional[float]:
         return float(value)
     except (TypeError, ValueError):
         return value
+
+
+def _at(value, default: int) -> int:
+    """Return a step column of evaluation_targets.csv as an int; default when empty (never)."""
+    number = _number(value)
+    return default if number is None else int(number)
 
 
 def _finite(value) -> bool:
