@@ -211,32 +211,29 @@ def target_step_table(cells: Sequence[Cell], rows: Sequence[dict],
     after a first detection, metrics.py); pooled shares are sums over the seeds divided by sums,
     so a long-lived target weighs more than a short one, as in tracked_share.
     """
+    data = by_seed(rows)
     phases: Dict[tuple, np.ndarray] = defaultdict(lambda: np.zeros(3))
     missed: Dict[str, np.ndarray] = defaultdict(lambda: np.zeros(3))
-    steps = {f"{r['setting']}/{r['label']}": int(_number(r['steps'])) for r in rows}
     for target in targets:
-        name = f"{target['setting']}/{target['label']}"
-        if name not in steps:
+        name, seed = f"{target['setting']}/{target['label']}", int(_number(target['seed']))
+        if seed not in data[name]['steps']:
             continue
-        split = np.array(target_phases(target, steps[name]))
-        phases[name, int(_number(target['seed']))] += split
+        phases[name, seed] += target_phases(target, int(data[name]['steps'][seed]))
         seen = _number(target['first_in_view']) is not None
-        if _number(target['first_detected']) is None:
-            missed[name] += [1, not seen, seen]
-        else:
-            missed[name] += [1, 0, 0]
+        found = _number(target['first_detected']) is not None
+        missed[name] += [1, not (seen or found), seen and not found]
     header = ['setting', 'configuration', 'target-steps', 'before first view %',
               'in view, not yet detected %', 'after first detection %', 'tracked %',
               'tracked after first detection %', 'targets', 'missed: never in view',
               'missed: in view, never detected']
     lines = _header(header)
     for cell in cells:
-        runs = [(phases[cell.name, int(_number(r['seed']))], _number(r['tracked_share']))
-                for r in rows if f"{r['setting']}/{r['label']}" == cell.name]
-        total = np.sum([split for split, _ in runs], axis=0) if runs else np.zeros(3)
+        shares = data[cell.name]['tracked_share']
+        total = sum((phases[cell.name, seed] for seed in shares), np.zeros(3))
         if not total.sum():
             continue
-        tracked = sum(split.sum() * share for split, share in runs if _finite(share))
+        tracked = sum(phases[cell.name, seed].sum() * share for seed, share in shares.items()
+                      if _finite(share))
         count, never_seen, unconfirmed = missed[cell.name]
         entries = [cell.setting, cell.label, f'{total.sum():.0f}']
         entries += [_fmt(100 * part / total.sum(), 1) for part in total]
