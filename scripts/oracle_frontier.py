@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from sat_agent.config import load_params_file
-from sat_world_sim.evaluate import read_rows
+from sat_world_sim.evaluate import read_rows, RUNS_CSV
 from sat_world_sim.evaluation_tables import by_seed
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.oracle_sweep import run_oracle_sweep
@@ -90,7 +90,7 @@ def main(argv=None) -> int:
     parser.add_argument('--first-seed', type=int, default=1)
     parser.add_argument('--limits', type=limit_value, nargs='+',
                         default=[0, 15, 30, 60, 100, None])
-    parser.add_argument('--csv', default=str(ROOT / 'docs' / 'evaluation.csv'),
+    parser.add_argument('--csv', default=str(ROOT / 'docs' / RUNS_CSV),
                         help='evaluation.csv with the persistent and sweep-and-track cells')
     args = parser.parse_args(argv)
     if args.seeds < 1:

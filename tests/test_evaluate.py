@@ -7,7 +7,7 @@ import pytest
 from sat_agent.config import load_params_file, SatParams
 from sat_world_sim import study_design
 from sat_world_sim.evaluate import cost_model, estimate, main, METRIC_WORDS, METRICS
-from sat_world_sim.evaluate import QUICK_STEPS, TABLE_MARKERS
+from sat_world_sim.evaluate import QUICK_STEPS, RUNS_CSV, SUMMARY_MD, TABLE_MARKERS
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
@@ -204,7 +204,7 @@ def test_quick_study_writes_rows_tables_readme_and_figures(tmp_path, capsys):
     args = ['--quick', '--seeds', '2', '--first-seed', '1001', '--jobs', '2', '--out', str(out),
             '--readme', str(readme), '--config', str(CONFIG), '--costs', str(tmp_path / 'no')]
     assert main(args + sum((['--only', name] for name in ONLY), [])) == 0
-    rows = read_rows(out / 'evaluation.csv')
+    rows = read_rows(out / RUNS_CSV)
     assert list(rows[0]) == list(CONFIG_COLUMNS) + ['seed'] + list(METRICS)
     assert [(r['setting'] + '/' + r['label'], r['seed']) for r in rows] == [
         (name, seed) for name in ONLY for seed in ('1001', '1002')]
@@ -221,7 +221,7 @@ def test_quick_study_writes_rows_tables_readme_and_figures(tmp_path, capsys):
     assert tables.count('(ref.)') == 3 * 6   # three settings' references, six metrics each
     assert readme.read_text() == (f'# Title\n{TABLE_MARKERS[0]}\n{tables}\n'
                                   f'{TABLE_MARKERS[1]}\nrest\n')
-    assert tables in (out / 'evaluation_summary.md').read_text()
+    assert tables in (out / SUMMARY_MD).read_text()
     for name in ('evaluation_time.png', 'evaluation_detection.png'):
         assert (out / name).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
     targets = read_rows(out / 'evaluation_targets.csv')
@@ -235,7 +235,7 @@ def test_the_dask_cluster_writes_the_same_rows_as_the_process_pool(tmp_path):
     assert main(args + ['--out', str(tmp_path / 'pool')]) == 0
     assert main(args + ['--out', str(tmp_path / 'dask'), '--scheduler', 'local']) == 0
     timing = ('wall_time_s', 'cpu_time_s')
-    pool, dask = (read_rows(tmp_path / name / 'evaluation.csv') for name in ('pool', 'dask'))
+    pool, dask = (read_rows(tmp_path / name / RUNS_CSV) for name in ('pool', 'dask'))
     assert len(pool) == 6
     assert [{k: v for k, v in r.items() if k not in timing} for r in pool] == \
         [{k: v for k, v in r.items() if k not in timing} for r in dask]

@@ -3,7 +3,7 @@ from dataclasses import replace
 import numpy as np
 
 from sat_world_sim.evaluate import cells_of, COSTS, main, METRICS, PER_CELL, row_sections
-from sat_world_sim.evaluate import TABLE_MARKERS, write_csv
+from sat_world_sim.evaluate import RUNS_CSV, SUMMARY_MD, TABLE_MARKERS, write_csv
 from sat_world_sim.evaluate import TARGET_COLUMNS, TARGET_STEPS, TARGETS_CSV
 from sat_world_sim.evaluation_plots import write_figures
 from sat_world_sim.evaluation_tables import rivals_table, study_tables, table_cells
@@ -105,12 +105,12 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     out = tmp_path / 'eval'
     out.mkdir()
     assert main(['--tables-only', '--out', str(out)]) == 2
-    assert 'evaluation.csv' in capsys.readouterr().err
+    assert RUNS_CSV in capsys.readouterr().err
     cells = CELLS + [PERSISTENT]
     rows = [result(cell, seed)['row'] for cell in cells for seed in SEEDS]
-    write_csv(rows, out / 'evaluation.csv', CONFIG_COLUMNS + ('seed',) + METRICS)
+    write_csv(rows, out / RUNS_CSV, CONFIG_COLUMNS + ('seed',) + METRICS)
     stale = f'{TABLE_MARKERS[0]}\nold\n{TABLE_MARKERS[1]}'
-    (out / 'evaluation_summary.md').write_text(
+    (out / SUMMARY_MD).write_text(
         f'# Summary\n\n{stale}\n\n## {PER_CELL}\n\nold\n\n## Cells skipped\n\n- none\n\n'
         f'## {COSTS}\n\nold\n')
     readme = tmp_path / 'README.md'
@@ -124,7 +124,7 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     # since that summary, appended); the cells skipped are not.
     sections = row_sections(cells_of(rows), rows, [])
     assert TARGETS_CSV in sections[TARGET_STEPS]
-    assert (out / 'evaluation_summary.md').read_text() == (
+    assert (out / SUMMARY_MD).read_text() == (
         f'# Summary\n\n{fresh}\n\n## {PER_CELL}\n\n{sections[PER_CELL]}\n\n'
         f'## Cells skipped\n\n- none\n\n## {COSTS}\n\n{sections[COSTS]}\n\n'
         f'## {TARGET_STEPS}\n\n{sections[TARGET_STEPS]}\n')
@@ -132,7 +132,7 @@ def test_tables_only_writes_the_tables_of_a_csv_again_without_running(tmp_path, 
     targets = [target_row(c, seed, 1, '', 11, 21) for c in cells for seed in SEEDS]
     write_csv(targets, out / TARGETS_CSV, TARGET_COLUMNS)
     assert main(['--tables-only', '--out', str(out)]) == 0
-    text = (out / 'evaluation_summary.md').read_text()
+    text = (out / SUMMARY_MD).read_text()
     assert text.count(f'## {TARGET_STEPS}') == 1
     assert target_step_table(cells_of(rows), rows, targets) in text
 

@@ -5,7 +5,7 @@ import runpy
 import pytest
 
 from sat_agent.config import load_params_file
-from sat_world_sim.evaluate import METRICS, run_one
+from sat_world_sim.evaluate import METRICS, run_one, RUNS_CSV
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE_TRACK
 from sat_world_sim.study_design import ORACLE_TRACK_LABEL, PERSISTENT_LABEL, PERSISTENT_PROFILE
@@ -35,7 +35,7 @@ def test_the_frontier_without_a_limit_is_the_evaluation_cell_and_the_paired_line
     for name in ('detected_share', 'tracked_share', 'mean_ospa'):
         assert point[name] == pytest.approx(sum(r[name] for r in rows) / 2)
     # Persistent 0.1 below the oracle on every seed and metric: the paired difference is -0.1.
-    csv_path = tmp_path / 'evaluation.csv'
+    csv_path = tmp_path / RUNS_CSV
     write_rows(csv_path, [(oracle, r['seed'], {m: r[m] for m in METRICS}) for r in rows]
                + [(persistent, r['seed'], {m: r[m] - 0.1 for m in METRICS}) for r in rows])
     assert FRONTIER['main'](['--seeds', '2', '--limits', '0', 'none', '--csv',

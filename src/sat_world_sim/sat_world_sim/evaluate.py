@@ -65,8 +65,11 @@ METRICS = ('mean_ospa', 'mean_ospa_loc', 'mean_ospa_card', 'mean_time_to_detecti
            'final_searched_pct', 'duplicate_tracking_steps', 'false_track_steps',
            'radio_msgs_per_agent_step', 'bytes_per_agent_step', 'targets_to_detect',
            'wall_time_s', 'cpu_time_s')
-# One row per target of every run: the run, then metrics.json's per-target entry.
+# The files evaluate writes into --out: one row per run, one row per target of every run (the
+# run, then metrics.json's per-target entry), the summary.
+RUNS_CSV = 'evaluation.csv'
 TARGETS_CSV = 'evaluation_targets.csv'
+SUMMARY_MD = 'evaluation_summary.md'
 TARGET_COLUMNS = ('setting', 'label', 'seed', 'id', 'born', 'died', 'first_in_view',
                   'first_detected', 'detection_delay', 'time_to_detection')
 METRIC_WORDS = ('ospa', 'time', 'pct', 'detect', 'bytes', 'msgs', 'steps', 'tracked', 'dup',
@@ -266,7 +269,7 @@ def write_summary(cells: Sequence[Cell], rows: Sequence[dict], targets: Sequence
         '# Evaluation summary\n\n'
         f'{len(rows)} runs in {seconds / 60:.1f} min on {os.cpu_count()} cores, made by '
         f'`{command}` (`make evaluate` regenerates the default study); one row per run in '
-        'evaluation.csv, the design in `sat_world_sim/study_design.py`.\n\n'
+        f'{RUNS_CSV}, the design in `sat_world_sim/study_design.py`.\n\n'
         f'{TABLE_MARKERS[0]}\n{tables}\n{TABLE_MARKERS[1]}\n\n'
         f'## {PER_CELL}\n\n{sections[PER_CELL]}\n\n'
         f'## Cells skipped\n\n{skipped_text}\n'
@@ -324,15 +327,15 @@ def rewrite_tables(out: Path, readme: Optional[str]) -> str:
     """
     from sat_world_sim.evaluation_tables import study_tables
 
-    rows = read_rows(out / 'evaluation.csv')
+    rows = read_rows(out / RUNS_CSV)
     targets = read_rows(out / TARGETS_CSV) if (out / TARGETS_CSV).exists() else []
     if not rows:
-        raise ValueError(f'{out / "evaluation.csv"}: no runs to tabulate')
+        raise ValueError(f'{out / RUNS_CSV}: no runs to tabulate')
     cells = cells_of(rows)
     tables = study_tables(cells, rows)
-    for path in [out / 'evaluation_summary.md'] + ([Path(readme)] if readme else []):
+    for path in [out / SUMMARY_MD] + ([Path(readme)] if readme else []):
         update_readme(path, tables)
-    summary = out / 'evaluation_summary.md'
+    summary = out / SUMMARY_MD
     text = summary.read_text(encoding='utf-8')
     for title, body in row_sections(cells, rows, targets).items():
         text = replace_section(text, title, body)
@@ -367,7 +370,7 @@ def _arguments(argv):
                         help='directory of the profiles (<profile>.yaml) and scenarios/paper.yaml')
     parser.add_argument('--readme', default=None,
                         help='also write the tables into this README (between markers)')
-    parser.add_argument('--costs', default='docs/evaluation.csv',
+    parser.add_argument('--costs', default=f'docs/{RUNS_CSV}',
                         help='an earlier evaluation.csv whose measured run costs give the '
                              'wall-time estimate')
     length = parser.add_mutually_exclusive_group()
@@ -445,20 +448,20 @@ def main(argv=None) -> int:
     results = run_study(runnable, seeds, paper, args.jobs, args.scheduler, cost,
                         progress=sys.stderr.isatty())
     rows = [r['row'] for r in results]
-    write_csv(rows, out / 'evaluation.csv', CONFIG_COLUMNS + ('seed',) + METRICS)
+    write_csv(rows, out / RUNS_CSV, CONFIG_COLUMNS + ('seed',) + METRICS)
     targets = [t for r in results for t in r['targets']]
     write_csv(targets, out / TARGETS_CSV, TARGET_COLUMNS)
     figures = write_figures(ran, results, out)
     tables = study_tables(ran, rows)
     seconds = time.perf_counter() - started
     given = sys.argv[1:] if argv is None else list(argv)
-    write_summary(ran, rows, targets, out / 'evaluation_summary.md', tables, skipped, seconds,
+    write_summary(ran, rows, targets, out / SUMMARY_MD, tables, skipped, seconds,
                   ' '.join(['evaluate'] + given))
     if args.readme:
         update_readme(Path(args.readme), tables)
     print(tables)
-    print(f'{len(rows)} runs in {seconds:.0f} s; wrote {out / "evaluation.csv"}, '
-          f'{out / "evaluation_summary.md"} and {len(figures)} figures', file=sys.stderr)
+    print(f'{len(rows)} runs in {seconds:.0f} s; wrote {out / RUNS_CSV}, '
+          f'{out / SUMMARY_MD} and {len(figures)} figures', file=sys.stderr)
     return 0
 
 
