@@ -7,7 +7,7 @@ import pytest
 from sat_agent.config import load_params_file, SatParams
 from sat_world_sim import study_design
 from sat_world_sim.evaluate import cost_model, estimate, main, METRIC_WORDS, METRICS
-from sat_world_sim.evaluate import QUICK_STEPS, RUNS_CSV, SUMMARY_MD, TABLE_MARKERS
+from sat_world_sim.evaluate import QUICK_STEPS, RUNS_CSV, SUMMARY_MD, TABLE_MARKERS, TARGETS_CSV
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
@@ -224,7 +224,7 @@ def test_quick_study_writes_rows_tables_readme_and_figures(tmp_path, capsys):
     assert tables in (out / SUMMARY_MD).read_text()
     for name in ('evaluation_time.png', 'evaluation_detection.png'):
         assert (out / name).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
-    targets = read_rows(out / 'evaluation_targets.csv')
+    targets = read_rows(out / TARGETS_CSV)
     assert {t['seed'] for t in targets} <= {'1001', '1002'}
 
 

@@ -150,7 +150,7 @@ def _rate_keys(columns, measured: bool) -> List[tuple]:
 
 
 def read_rows(path) -> List[dict]:
-    """Rows of an evaluation.csv (none if the file does not exist)."""
+    """Rows of one of the CSV files evaluate writes (none if the file does not exist)."""
     if not Path(path).exists():
         return []
     with open(path, newline='', encoding='utf-8') as stream:
@@ -328,7 +328,7 @@ def rewrite_tables(out: Path, readme: Optional[str]) -> str:
     from sat_world_sim.evaluation_tables import study_tables
 
     rows = read_rows(out / RUNS_CSV)
-    targets = read_rows(out / TARGETS_CSV) if (out / TARGETS_CSV).exists() else []
+    targets = read_rows(out / TARGETS_CSV)
     if not rows:
         raise ValueError(f'{out / RUNS_CSV}: no runs to tabulate')
     cells = cells_of(rows)
