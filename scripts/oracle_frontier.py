@@ -8,13 +8,17 @@ its strip; 0 is the oracle sweep, "none" follows until the target dies), on the 
 scenarios (study_design.scenario_for: the same truth per seed as every cell of make evaluate).
 Per limit: mean detected share, tracked share and OSPA over the seeds, and whether issue 15's
 floors hold at once (detected >= 90 % of the oracle sweep's, tracked >= 45 %, OSPA <= 6 m).
-No filter, no radio: a run costs ~0.2 s. Then, from an evaluation.csv (``--csv``, make
-evaluate's by default), the persistent profile's means on the same metrics and its paired
-differences to the oracle sweep-and-track cell (follow limit none) on the seeds both have, with
-the tables' 95 % bootstrap CI and Wilcoxon mark (paired_statistics.py).
+``--followers F`` lets only the F highest ids follow (the others sweep for ever) and
+``--dispatch`` sends a free follower to any target the team has seen, not only one in its square
+(oracle_sweep.py's two other readings). No filter, no radio: a run costs ~0.2 s. Then, from
+an evaluation.csv (``--csv``, make evaluate's by default), the persistent profile's means on
+the same metrics and its paired differences to the oracle sweep-and-track cell (follow limit
+none, every agent a follower, no dispatch) on the seeds both have, with the tables' 95 %
+bootstrap CI and Wilcoxon mark (paired_statistics.py).
 
     scripts/with_env.sh python scripts/oracle_frontier.py [--setting random] [--seeds 50]
-        [--first-seed 1] [--limits 0 15 30 60 100 none] [--csv docs/evaluation.csv]
+        [--first-seed 1] [--limits 0 15 30 60 100 none] [--followers F] [--dispatch]
+        [--csv docs/evaluation.csv]
 """
 
 import argparse
@@ -49,15 +53,19 @@ def limit_value(text: str):
     return value
 
 
-def frontier_point(setting: str, seeds, limit) -> dict:
-    """Return the mean METRICS of the oracle with one follow limit (0: the sweep)."""
+def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = False) -> dict:
+    """Return the mean METRICS of the oracle with one follow limit (0: the sweep).
+
+    followers, dispatch: run_oracle_sweep's (None, False: the sweep-and-track cell).
+    """
     cell = default_cell(setting, 'oracle', policy=ORACLE, planner='none')
     params = cell.params(load_params_file(ROOT / 'config' / f'{cell.profile}.yaml'))
     paper = load_scenario(ROOT / 'config' / 'scenarios' / 'paper.yaml')
     rows = []
     for seed in seeds:
         scenario = scenario_for(cell, seed, params, paper)
-        run = run_oracle_sweep(scenario, params, follow=limit != 0, follow_limit=limit)
+        run = run_oracle_sweep(scenario, params, follow=limit != 0, follow_limit=limit,
+                               followers=followers, dispatch=dispatch)
         rows.append(compute_metrics(run.records, scenario.name, seed)['summary'])
     return {name: float(np.mean([row[name] for row in rows])) for name in METRICS}
 
@@ -90,20 +98,29 @@ def main(argv=None) -> int:
     parser.add_argument('--first-seed', type=int, default=1)
     parser.add_argument('--limits', type=limit_value, nargs='+',
                         default=[0, 15, 30, 60, 100, None])
+    parser.add_argument('--followers', type=int, default=None,
+                        help='how many agents may follow, the highest ids (default: all)')
+    parser.add_argument('--dispatch', action='store_true',
+                        help='free followers take any target the team has seen')
     parser.add_argument('--csv', default=str(ROOT / 'docs' / RUNS_CSV),
                         help='evaluation.csv with the persistent and sweep-and-track cells')
     args = parser.parse_args(argv)
     if args.seeds < 1:
         parser.error(f'--seeds {args.seeds}: must be >= 1')
+    if args.followers is not None and args.followers < 0:
+        parser.error(f'--followers {args.followers}: must be >= 0')
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     sweep = frontier_point(args.setting, seeds, 0)
     print(f'{args.setting}, seeds {seeds.start}-{seeds.stop - 1}; floors: detected >= '
           f'{CEILING_SHARE * sweep["detected_share"]:.1%} ({CEILING_SHARE:.0%} of the sweep), '
-          f'tracked >= {TRACKED_FLOOR:.0%}, OSPA <= {OSPA_FLOOR:g} m')
+          f'tracked >= {TRACKED_FLOOR:.0%}, OSPA <= {OSPA_FLOOR:g} m; followers: '
+          f'{"all" if args.followers is None else args.followers}'
+          f'{", dispatched to any target seen" if args.dispatch else ""}')
     print('| follow limit (steps) | detected % | tracked % | OSPA (m) | all floors |')
     print('| --- | --- | --- | --- | --- |')
     for limit in args.limits:
-        point = sweep if limit == 0 else frontier_point(args.setting, seeds, limit)
+        point = sweep if limit == 0 else frontier_point(args.setting, seeds, limit,
+                                                        args.followers, args.dispatch)
         met = (point['detected_share'] >= CEILING_SHARE * sweep['detected_share']
                and point['tracked_share'] >= TRACKED_FLOOR and point['mean_ospa'] <= OSPA_FLOOR)
         name = 'none (until it dies)' if limit is None else str(limit)

@@ -6,9 +6,12 @@ import pytest
 
 from sat_agent.config import load_params_file
 from sat_world_sim.evaluate import METRICS, run_one, RUNS_CSV
+from sat_world_sim.metrics import compute_metrics
+from sat_world_sim.oracle_sweep import run_oracle_sweep
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE_TRACK
 from sat_world_sim.study_design import ORACLE_TRACK_LABEL, PERSISTENT_LABEL, PERSISTENT_PROFILE
+from sat_world_sim.study_design import scenario_for
 
 REPO = Path(__file__).resolve().parents[1]
 FRONTIER = runpy.run_path(str(REPO / 'scripts' / 'oracle_frontier.py'))
@@ -53,3 +56,27 @@ def test_the_frontier_refuses_a_negative_limit_and_says_when_rows_are_missing(tm
     lines = FRONTIER['persistent_against_the_oracle']('random', tmp_path / 'none.csv')
     assert lines == [f'{tmp_path / "none.csv"}: no {PERSISTENT_LABEL} or {ORACLE_TRACK_LABEL} '
                      f'({ORACLE_TRACK}) rows at random']
+
+
+def test_the_frontier_passes_followers_and_dispatch_to_the_oracle(tmp_path, capsys):
+    # One follower, dispatched: run_oracle_sweep's figures for the same seeds.
+    cell = default_cell('random', ORACLE_TRACK_LABEL, policy=ORACLE_TRACK, planner='none')
+    params = cell.params(load_params_file(REPO / 'config' / 'paper.yaml'))
+    paper = load_scenario(REPO / 'config' / 'scenarios' / 'paper.yaml')
+    tracked = []
+    for seed in (1, 2):
+        scenario = scenario_for(cell, seed, params, paper)
+        run = run_oracle_sweep(scenario, params, follow=True, followers=1, dispatch=True)
+        tracked.append(compute_metrics(run.records, scenario.name, seed)['summary']
+                       ['tracked_share'])
+    point = FRONTIER['frontier_point']('random', (1, 2), None, 1, True)
+    assert point['tracked_share'] == pytest.approx(sum(tracked) / 2)
+    assert point != FRONTIER['frontier_point']('random', (1, 2), None)
+    assert FRONTIER['main'](['--seeds', '2', '--limits', 'none', '--followers', '1',
+                             '--dispatch', '--csv', str(tmp_path / RUNS_CSV)]) == 0
+    out = capsys.readouterr().out
+    assert 'followers: 1, dispatched to any target seen' in out
+    assert f'| none (until it dies) | {100 * point["detected_share"]:.1f} | ' in out
+    with pytest.raises(SystemExit):
+        FRONTIER['main'](['--followers', '-1'])
+    assert '--followers -1: must be >= 0' in capsys.readouterr().err

@@ -170,3 +170,38 @@ def test_a_follow_limit_releases_the_target_for_good_and_sends_the_agent_back_to
                                                            len(poses) - 10))
     tracked = compute_metrics(run.records, scenario.name, 3)['summary']['tracked_share']
     assert tracked < 1.0
+
+
+def test_with_one_follower_the_other_agent_sweeps_past_a_target_it_sees():
+    scenario = followed_scenario()
+    # Agent 2 alone may follow and never has the target in its square: nobody follows it.
+    run = run_oracle_sweep(scenario, PARAMS, follow=True, followers=1)
+    sweep = run_oracle_sweep(scenario, PARAMS)
+    assert {m for r in run.records for m in r.modes.values()} == {'SEARCH'}
+    for mine, swept in zip(run.records, sweep.records):
+        np.testing.assert_allclose(mine.agent_poses[1], swept.agent_poses[1])
+        np.testing.assert_allclose(mine.agent_poses[2], swept.agent_poses[2])
+    assert len(run.records[0].estimates[1]) == 1
+    with pytest.raises(ValueError, match='followers = 3 for a team of 2: must be 0 to 2'):
+        run_oracle_sweep(scenario, PARAMS, follow=True, followers=3)
+
+
+def test_dispatch_sends_the_free_follower_to_a_target_another_agent_has_seen():
+    scenario = followed_scenario()
+    run = run_oracle_sweep(scenario, PARAMS, follow=True, followers=1, dispatch=True)
+    speed = sweep_speed(PARAMS)
+    poses = np.array([r.agent_poses[2] for r in run.records])
+    assert np.hypot(*np.diff(poses, axis=0).T).max() <= speed + 1e-9
+    # Agent 1 sees the target at k = 1 (its start); agent 2, 70 m off, is dispatched at once
+    # and flies to it at v, then holds it in view until it dies at k = 60.
+    modes = [r.modes for r in run.records]
+    assert all(m == {1: 'SEARCH', 2: 'TRACK'} for m in modes[:60])
+    assert {m for r in modes[60:] for m in r.values()} == {'SEARCH'}
+    arrived = next(k for k, r in enumerate(run.records)
+                   if in_sensing_square(r.truth_positions, r.agent_poses[2], SIDE).all())
+    assert 10 < arrived < 40
+    for record in run.records[arrived:60]:
+        assert in_sensing_square(record.truth_positions, record.agent_poses[2], SIDE).all()
+    # Without dispatch agent 2 never goes there.
+    alone = run_oracle_sweep(scenario, PARAMS, follow=True, followers=1)
+    assert not any(len(r.estimates[2]) for r in alone.records)

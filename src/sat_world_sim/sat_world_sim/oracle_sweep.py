@@ -36,6 +36,14 @@ strips could trade tracked share for detected share differently. With ``follow_l
 agent follows a target for L steps at most, then releases it for good (nobody follows it again)
 and flies back to its strip: L from 0 (the sweep) to the targets' lives traces how this oracle
 trades detected for tracked share (scripts/oracle_frontier.py).
+
+Two more readings of "sweep, and track what you find", for the same frontier: with
+``followers`` F only the F highest ids may follow, the others sweep for ever (dedicated
+searchers); with ``dispatch`` a free follower takes the nearest target, followed by nobody and
+not released, that any agent has had in its square so far (not only one in its own square),
+flies to it at most v a step and follows it from then on: the team knows where every target it
+has seen is, as a swarm sharing perfect tracks would. Both keep the strips: an agent flies back
+to its own when it stops following. README (issue 15) has their figures: none meets the floors.
 """
 
 import time
@@ -151,15 +159,23 @@ class _Sweeper:
         return self.path[self.cursor]
 
 
-def _assign_followers(team, truth, poses, side: float, row: int, released: set) -> None:
-    """Free agents (ascending id) follow the nearest target in view nobody follows or released."""
+def _assign_followers(team, truth, poses, side: float, row: int, released: set,
+                      known: Optional[set]) -> None:
+    """Free agents (ascending id) follow the nearest target nobody follows or released.
+
+    The candidates: the targets in the agent's square, or with known (dispatch) the targets
+    some agent has seen so far. team holds the agents that may follow.
+    """
     followed = {s.target for s in team.values() if s.target is not None} | released
     for agent_id in sorted(team):
         sweeper = team[agent_id]
         if sweeper.target is not None:
             continue
-        seen = in_sensing_square(truth.positions, poses[agent_id], side)
-        free = seen & ~np.isin(truth.ids, list(followed))
+        if known is None:
+            candidates = in_sensing_square(truth.positions, poses[agent_id], side)
+        else:
+            candidates = np.isin(truth.ids, list(known))
+        free = candidates & ~np.isin(truth.ids, list(followed))
         if free.any():
             distance = np.hypot(*(truth.positions - poses[agent_id]).T)
             # argmin returns the first minimum: equal distances go to the lower id's row.
@@ -169,10 +185,13 @@ def _assign_followers(team, truth, poses, side: float, row: int, released: set) 
 
 
 def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int] = None,
-                     follow: bool = False, follow_limit: Optional[int] = None) -> SwarmRun:
+                     follow: bool = False, follow_limit: Optional[int] = None,
+                     followers: Optional[int] = None, dispatch: bool = False) -> SwarmRun:
     """Run the oracle sweep (follow: sweep-and-track) over the scenario's truth (docstring).
 
     follow_limit: the most steps an agent follows one target (None: until it dies).
+    followers: how many agents may follow, the highest ids (None: all of them).
+    dispatch: free followers take any target seen so far, not only one in their square.
 
     Records as the in-process swarm's. The truth is the World's, so for a seed the oracle meets
     the same targets as every policy. final_density is the coverage (1 where some square has
@@ -189,14 +208,23 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
             for agent_id, lanes in zip(ids, strip_lanes(params, len(ids)))}
     side = params.sensor.square_side
     limit = np.inf if follow_limit is None else follow_limit
+    count = len(ids) if followers is None else followers
+    if not 0 <= count <= len(ids):
+        raise ValueError(f'oracle sweep: followers = {followers} for a team of {len(ids)}: '
+                         f'must be 0 to {len(ids)}')
+    chasers = {agent_id: team[agent_id] for agent_id in sorted(ids)[len(ids) - count:]}
     released = set()
+    known = set() if dispatch else None
     records = []
     for row in range(steps):
         truth = world.truth()
         poses = world.poses()
+        if dispatch:
+            known.update(truth.ids[np.any([in_sensing_square(truth.positions, poses[a], side)
+                                           for a in ids], axis=0)].tolist())
         if follow:
             alive = set(truth.ids.tolist())
-            for agent_id, sweeper in team.items():
+            for agent_id, sweeper in chasers.items():
                 if sweeper.target is None:
                     continue
                 if row - sweeper.since >= limit:
@@ -204,7 +232,7 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
                 elif sweeper.target in alive:
                     continue
                 sweeper.resume(poses[agent_id], steps - row)
-            _assign_followers(team, truth, poses, side, row, released)
+            _assign_followers(chasers, truth, poses, side, row, released, known)
         records.append(StepRecord(
             step=world.step, truth_ids=truth.ids, truth_positions=truth.positions,
             agent_poses=poses,
