@@ -119,8 +119,11 @@ def main(argv=None) -> int:
     print('| follow limit (steps) | detected % | tracked % | OSPA (m) | all floors |')
     print('| --- | --- | --- | --- | --- |')
     for limit in args.limits:
-        point = sweep if limit == 0 else frontier_point(args.setting, seeds, limit,
-                                                        args.followers, args.dispatch)
+        try:
+            point = sweep if limit == 0 else frontier_point(args.setting, seeds, limit,
+                                                            args.followers, args.dispatch)
+        except ValueError as error:
+            parser.error(f'--followers {args.followers}: {error}')
         met = (point['detected_share'] >= CEILING_SHARE * sweep['detected_share']
                and point['tracked_share'] >= TRACKED_FLOOR and point['mean_ospa'] <= OSPA_FLOOR)
         name = 'none (until it dies)' if limit is None else str(limit)

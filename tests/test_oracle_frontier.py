@@ -80,3 +80,6 @@ def test_the_frontier_passes_followers_and_dispatch_to_the_oracle(tmp_path, caps
     with pytest.raises(SystemExit):
         FRONTIER['main'](['--followers', '-1'])
     assert '--followers -1: must be >= 0' in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        FRONTIER['main'](['--seeds', '1', '--limits', 'none', '--followers', '5'])
+    assert 'followers = 5 for a team of 4: must be 0 to 4' in capsys.readouterr().err
