@@ -159,12 +159,13 @@ class _Sweeper:
         return self.path[self.cursor]
 
 
-def _assign_followers(team, truth, poses, side: float, row: int, released: set,
+def _assign_followers(team, truth, poses, in_view: dict, row: int, released: set,
                       known: Optional[set]) -> None:
     """Free agents (ascending id) follow the nearest target nobody follows or released.
 
-    The candidates: the targets in the agent's square, or with known (dispatch) the targets
-    some agent has seen so far. team holds the agents that may follow.
+    The candidates: the targets in the agent's square (in_view: agent id -> mask over the truth
+    rows), or with known (dispatch) the targets some agent has seen so far. team holds the
+    agents that may follow.
     """
     followed = {s.target for s in team.values() if s.target is not None} | released
     for agent_id in sorted(team):
@@ -172,7 +173,7 @@ def _assign_followers(team, truth, poses, side: float, row: int, released: set,
         if sweeper.target is not None:
             continue
         if known is None:
-            candidates = in_sensing_square(truth.positions, poses[agent_id], side)
+            candidates = in_view[agent_id]
         else:
             candidates = np.isin(truth.ids, list(known))
         free = candidates & ~np.isin(truth.ids, list(followed))
@@ -219,9 +220,9 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
     for row in range(steps):
         truth = world.truth()
         poses = world.poses()
+        in_view = {a: in_sensing_square(truth.positions, poses[a], side) for a in ids}
         if dispatch:
-            known.update(truth.ids[np.any([in_sensing_square(truth.positions, poses[a], side)
-                                           for a in ids], axis=0)].tolist())
+            known.update(truth.ids[np.any(list(in_view.values()), axis=0)].tolist())
         if follow:
             alive = set(truth.ids.tolist())
             for agent_id, sweeper in chasers.items():
@@ -232,13 +233,12 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
                 elif sweeper.target in alive:
                     continue
                 sweeper.resume(poses[agent_id], steps - row)
-            _assign_followers(chasers, truth, poses, side, row, released, known)
+            _assign_followers(chasers, truth, poses, in_view, row, released, known)
         records.append(StepRecord(
             step=world.step, truth_ids=truth.ids, truth_positions=truth.positions,
             agent_poses=poses,
             modes={a: MODE if team[a].target is None else FOLLOW_MODE for a in ids},
-            estimates={a: truth.positions[in_sensing_square(truth.positions, poses[a], side)]
-                       for a in ids},
+            estimates={a: truth.positions[in_view[a]] for a in ids},
             searched_fraction=world.searched_fraction()))
         if row + 1 < steps:
             world.place_agents({a: _next_position(team[a], poses[a], truth, speed, params)
