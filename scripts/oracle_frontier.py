@@ -10,14 +10,16 @@ Per limit: mean detected share, tracked share and OSPA over the seeds, and wheth
 floors hold at once (detected >= 90 % of the oracle sweep's, tracked >= 45 %, OSPA <= 6 m).
 ``--followers F`` lets only the F highest ids follow (the others sweep for ever) and
 ``--dispatch`` sends a free follower to any target the team has seen, not only one in its square
-(oracle_sweep.py's two other readings). No filter, no radio: a run costs ~0.2 s. Then, from
+(oracle_sweep.py's two other readings); ``--coast`` has every agent also report the targets it
+saw and no longer sees, moved on at their true velocity (oracle_sweep.py, the oracle reading of
+additions.track_coasting). No filter, no radio: a run costs ~0.2 s. Then, from
 an evaluation.csv (``--csv``, make evaluate's by default), the persistent profile's means on
 the same metrics and its paired differences to the oracle sweep-and-track cell (follow limit
 none, every agent a follower, no dispatch) on the seeds both have, with the tables' 95 %
 bootstrap CI and Wilcoxon mark (paired_statistics.py).
 
     scripts/with_env.sh python scripts/oracle_frontier.py [--setting random] [--seeds 50]
-        [--first-seed 1] [--limits 0 15 30 60 100 none] [--followers F] [--dispatch]
+        [--first-seed 1] [--limits 0 15 30 60 100 none] [--followers F] [--dispatch] [--coast]
         [--csv docs/evaluation.csv]
 """
 
@@ -53,10 +55,12 @@ def limit_value(text: str):
     return value
 
 
-def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = False) -> dict:
+def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = False,
+                   coast: bool = False) -> dict:
     """Return the mean METRICS of the oracle with one follow limit (0: the sweep).
 
-    followers, dispatch: run_oracle_sweep's (None, False: the sweep-and-track cell).
+    followers, dispatch, coast: run_oracle_sweep's (None, False, False: the sweep-and-track
+    cell).
     """
     cell = default_cell(setting, 'oracle', policy=ORACLE, planner='none')
     params = cell.params(load_params_file(ROOT / 'config' / f'{cell.profile}.yaml'))
@@ -65,7 +69,7 @@ def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = 
     for seed in seeds:
         scenario = scenario_for(cell, seed, params, paper)
         run = run_oracle_sweep(scenario, params, follow=limit != 0, follow_limit=limit,
-                               followers=followers, dispatch=dispatch)
+                               followers=followers, dispatch=dispatch, coast=coast)
         rows.append(compute_metrics(run.records, scenario.name, seed)['summary'])
     return {name: float(np.mean([row[name] for row in rows])) for name in METRICS}
 
@@ -102,6 +106,8 @@ def main(argv=None) -> int:
                         help='how many agents may follow, the highest ids (default: all)')
     parser.add_argument('--dispatch', action='store_true',
                         help='free followers take any target the team has seen')
+    parser.add_argument('--coast', action='store_true',
+                        help='agents also report the targets they saw, moved on at true velocity')
     parser.add_argument('--csv', default=str(ROOT / 'docs' / RUNS_CSV),
                         help='evaluation.csv with the persistent and sweep-and-track cells')
     args = parser.parse_args(argv)
@@ -115,13 +121,15 @@ def main(argv=None) -> int:
           f'{CEILING_SHARE * sweep["detected_share"]:.1%} ({CEILING_SHARE:.0%} of the sweep), '
           f'tracked >= {TRACKED_FLOOR:.0%}, OSPA <= {OSPA_FLOOR:g} m; followers: '
           f'{"all" if args.followers is None else args.followers}'
-          f'{", dispatched to any target seen" if args.dispatch else ""}')
+          f'{", dispatched to any target seen" if args.dispatch else ""}'
+          f'{", coasting what they saw" if args.coast else ""}')
     print('| follow limit (steps) | detected % | tracked % | OSPA (m) | all floors |')
     print('| --- | --- | --- | --- | --- |')
     for limit in args.limits:
         try:
-            point = sweep if limit == 0 else frontier_point(args.setting, seeds, limit,
-                                                            args.followers, args.dispatch)
+            point = (sweep if limit == 0 and not args.coast else
+                     frontier_point(args.setting, seeds, limit, args.followers, args.dispatch,
+                                    args.coast))
         except ValueError as error:
             parser.error(f'--followers {args.followers}: {error}')
         met = (point['detected_share'] >= CEILING_SHARE * sweep['detected_share']

@@ -83,3 +83,24 @@ def test_the_frontier_passes_followers_and_dispatch_to_the_oracle(tmp_path, caps
     with pytest.raises(SystemExit):
         FRONTIER['main'](['--seeds', '1', '--limits', 'none', '--followers', '5'])
     assert 'followers = 5 for a team of 4: must be 0 to 4' in capsys.readouterr().err
+
+
+def test_the_frontier_passes_coast_and_coasting_even_the_sweep_tracks(tmp_path, capsys):
+    cell = default_cell('random', ORACLE_TRACK_LABEL, policy=ORACLE_TRACK, planner='none')
+    params = cell.params(load_params_file(REPO / 'config' / 'paper.yaml'))
+    paper = load_scenario(REPO / 'config' / 'scenarios' / 'paper.yaml')
+    scenario = scenario_for(cell, 1, params, paper)
+    run = run_oracle_sweep(scenario, params, follow=True, follow_limit=10, coast=True)
+    coasted = FRONTIER['frontier_point']('random', (1,), 10, coast=True)
+    assert coasted['tracked_share'] == pytest.approx(
+        compute_metrics(run.records, scenario.name, 1)['summary']['tracked_share'])
+    assert coasted['tracked_share'] > FRONTIER['frontier_point']('random', (1,), 10)[
+        'tracked_share']
+    # With --coast the limit 0 row is the coasting sweep, not the plain one.
+    assert FRONTIER['main'](['--seeds', '1', '--limits', '0', '--coast',
+                             '--csv', str(tmp_path / RUNS_CSV)]) == 0
+    out = capsys.readouterr().out
+    sweep = FRONTIER['frontier_point']('random', (1,), 0, coast=True)
+    assert 'coasting what they saw' in out
+    assert f'| 0 | {100 * sweep["detected_share"]:.1f} | {100 * sweep["tracked_share"]:.1f} |' \
+        in out

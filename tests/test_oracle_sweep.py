@@ -3,6 +3,7 @@ import math
 import numpy as np
 import pytest
 
+from sat_agent.beyond_paper.track_coasting import coast_steps
 from sat_agent.config import SatParams
 from sat_agent.sensor_model import in_sensing_square
 from sat_world_sim.metrics import compute_metrics
@@ -205,3 +206,31 @@ def test_dispatch_sends_the_free_follower_to_a_target_another_agent_has_seen():
     # Without dispatch agent 2 never goes there.
     alone = run_oracle_sweep(scenario, PARAMS, follow=True, followers=1)
     assert not any(len(r.estimates[2]) for r in alone.records)
+
+
+def test_coasting_reports_a_released_target_on_its_walk_and_a_dead_one_until_the_horizon():
+    scenario = followed_scenario(140)
+    run = run_oracle_sweep(scenario, PARAMS, follow=True, follow_limit=10, coast=True)
+    plain = run_oracle_sweep(scenario, PARAMS, follow=True, follow_limit=10)
+    for mine, other in zip(run.records, plain.records):
+        np.testing.assert_allclose(mine.agent_poses[1], other.agent_poses[1])
+    horizon = coast_steps(PARAMS)
+    coasted = []
+    for record in run.records:
+        seen = in_sensing_square(record.truth_positions, record.agent_poses[1], SIDE)
+        if 1 in record.truth_ids and not seen.any():
+            # Out of view and alive: reported where it is (the oracle knows the velocity; the
+            # truth process noise moves it ~1 m off the line in 45 steps).
+            assert record.estimates[1].shape == (1, 2)
+            assert np.hypot(*(record.estimates[1] - record.truth_positions)[0]) < 2.0
+            coasted.append(record.step)
+    assert len(coasted) > 20
+    last_seen = min(coasted) - 1
+    # Dead at k = 60 and out of every square: reported on, as a false track, until the
+    # horizon p_S^t >= 1/2 unless a square passes over the point.
+    false = [r.step for r in run.records if 1 not in r.truth_ids and len(r.estimates[1])]
+    assert false and max(false) <= last_seen + horizon
+    summary = compute_metrics(run.records, scenario.name, 3)['summary']
+    assert summary['tracked_share'] == 1.0 > compute_metrics(
+        plain.records, scenario.name, 3)['summary']['tracked_share']
+    assert summary['false_track_steps'] == len(false)

@@ -1,5 +1,6 @@
 """records.RunCollector: a long run's metrics from a bounded window of messages."""
 
+from geometry_msgs.msg import Point
 from test_rerun_logger import AGENTS, synthetic_messages
 
 from sat_world_sim.metrics import compute_metrics
@@ -76,3 +77,16 @@ def test_statuses_later_than_other_topics_by_more_than_the_window_still_count():
     assert all(set(r.modes) == {1, 2} for r in records)
     assert compute_metrics(records, 'synthetic', 1) == \
         compute_metrics(every_step_record(messages), 'synthetic', 1)
+
+
+def test_a_status_reports_its_estimates_and_its_coasted_targets():
+    messages = list(synthetic_messages(2))
+    for topic, msg in messages:
+        if topic == '/agent_2/status':
+            msg.coasted = [Point(x=20.0 + msg.step, y=10.0)]
+    records = every_step_record(messages)
+    # Agent 1 estimates one target in view; agent 2 reports one coasted target.
+    assert records[0].estimates[1].shape == (1, 2)
+    assert records[0].estimates[2].tolist() == [[21.0, 10.0]]
+    assert records[1].estimates[2].tolist() == [[22.0, 10.0]]
+    assert compute_metrics(records, 'synthetic', 1)['summary']['false_track_steps'] == 2

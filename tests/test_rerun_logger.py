@@ -129,6 +129,7 @@ def test_write_rrd_replays_topic_messages_in_step_order_and_skips_what_is_missin
     logged, static = rrd_contents(tmp_path / 'run.rrd')
     assert logged['map/world/truth'] == list(range(1, steps + 1))
     assert logged['map/world/agent_1/estimates'] == list(range(1, steps + 1))
+    assert logged['map/world/agent_2/coasted'] == [1, 2, 4, 5]     # empty lists, logged
     assert logged['map/world/agent_2/plan'] == [1, 2, 4, 5]
     assert not any('agent_9' in entity for entity in logged)
     assert 'map/world/area' in static

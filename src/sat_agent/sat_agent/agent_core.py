@@ -3,14 +3,19 @@
 ``Agent.step`` runs, at step k (the filter was predicted to k at the end of step k-1):
 
 1. correct the SAT-PHD with Z_k at s_k (Eqn. satphd_correct) and extract X-hat_k with the
-   extractor (state_extraction; it remembers what the next extraction needs);
+   extractor (state_extraction; it remembers what the next extraction needs); with
+   additions.track_coasting, continue the agent's short tracks with X-hat_k, coast the others
+   and add their next positions to the extraction's expected targets
+   (beyond_paper/track_coasting.py);
 2. fuse the neighbours' search densities into its own (elementwise max, "Cooperation"), each
    predicted from its step to k first (search_density);
 3. tracking overlap: for every neighbour that, like this agent, was in TRACK at k-1, add the
    incremental score (Eqn. ospa) of the two agents' k-1 reports (poses s_{k-1} and predicted
    positions x + v T) to the window; leave TRACK when the window says overlap and this agent is
    the leaver;
-4. update the mode (SEARCH/TRACK) from the number of targets in X-hat_k;
+4. update the mode (SEARCH/TRACK) from the number of targets in X-hat_k (with track coasting:
+   of those whose tracks are still short; a tracker whose targets all have long tracks leaves
+   TRACK as an overlap leaver does);
 5. in SEARCH, mark the walk's nodes in view as visited and (re)plan when the rules of
    SearchPlanner say so, jointly with the searching agents in range;
 6. predict the SAT-PHD to k+1 with s_k (Eqn. satphd_predict) and choose the action: the search
@@ -21,7 +26,8 @@
    (beyond_paper/investigation.py). A baseline of ``search.policy`` (baselines/) replaces the
    search control, or the whole control (PHD-Voronoi, Thompson sampling);
 7. publish the report of step k: search density, multi-target estimate, mode (what the paper
-   exchanges) with agent id, step and pose as header.
+   exchanges) with agent id, step and pose as header. The coasted targets are in the output
+   (``AgentOutput.reported_positions``), not in the report.
 
 Agreeing on a joint plan without extra messages: every member of a group must compute the same
 partition of the unvisited nodes. So a joint plan at step k is made only from the reports of
@@ -41,7 +47,7 @@ components' constructors, from ``params.additions`` (beyond_paper/__init__.py li
 ``step`` does not branch on them.
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import List, Optional, Sequence
 
@@ -54,6 +60,7 @@ from sat_agent.beyond_paper.investigation import (
     Investigation, keep_in_view_action, Look, NO_LOOK)
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
+from sat_agent.beyond_paper.track_coasting import NoCoasting, TrackCoasting
 from sat_agent.beyond_paper.track_release import TrackRelease
 from sat_agent.config import ParameterError, SatParams
 from sat_agent.density_codec import encode_density
@@ -149,6 +156,11 @@ class AgentOutput:
     mode: Mode
     left_overlap_with: Optional[int] = None
     replan: ReplanReason = ReplanReason.NONE
+    coasted: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+    def reported_positions(self) -> np.ndarray:
+        """(n, 2) the targets the agent reports: X-hat_k and its coasted tracks."""
+        return np.vstack([self.report.target_positions(), self.coasted])
 
 
 class NoInvestigation:
@@ -197,6 +209,7 @@ class Agent:
         self.investigation = (Investigation(params) if additions.investigation
                               else NoInvestigation())
         self.release = TrackRelease(params) if additions.track_release else KeepAll()
+        self.coasting = TrackCoasting(params) if additions.track_coasting else NoCoasting()
         self._scratch = SearchDensity(self.filter.search.lattice, params)
         self._last_report: Optional[AgentReport] = None
         self.dropped_reports = 0
@@ -237,12 +250,20 @@ class Agent:
         reports = self._valid_reports(step, inbox)
         self.filter.correct(measurements, pose)
         estimate = self.extractor.extract(self.filter.targets, pose)
+        coasting = self.coasting.update(
+            step, pose, estimate.targets, [r.pose for r in reports], np.vstack(
+                [np.zeros((0, 2))] + [r.predicted_positions(self.params.motion.dt)
+                                      for r in reports]))
+        self.extractor.memory = replace(self.extractor.memory, expected=np.vstack(
+            [self.extractor.memory.expected, coasting.expected]))
         for report in late + reports:
             self.filter.search.fuse(self._density_at(step, report))
         searchers = self._searchers(reports)
         was_tracking = self.modes.mode == Mode.TRACK
         leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
-        mode = self.modes.update(len(estimate.targets), leaving_for is not None)
+        # A tracker whose targets are all followed long enough searches on (track_coasting).
+        followed = was_tracking and estimate.targets and not coasting.fresh
+        mode = self.modes.update(coasting.fresh, leaving_for is not None or followed)
         replan = ReplanReason.NONE
         if mode == Mode.SEARCH and self.baseline is None:
             replan = self._search_plan(step, pose, reports, searchers, resumed=was_tracking)
@@ -256,7 +277,7 @@ class Agent:
         action, goal, plan = self._control(mode, pose, estimate, view)
         self._last_report = report
         return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
-                           mode, leaving_for, replan)
+                           mode, leaving_for, replan, coasting.coasted)
 
     def _control(self, mode: Mode, pose: np.ndarray, estimate: MultiTargetEstimate,
                  view: BaselineView):

@@ -192,6 +192,27 @@ class PhdParams:
     tentative_threshold: float = param(
         0.2, 'additions.investigation: unconfirmed peaks in the square with this mass are '
         'tentative', low=0, high=0.5)
+    # 20 estimates 1 m apart in error pin a straight walk's velocity to ~4 cm/s.
+    coast_history: int = param(
+        50, 'additions.track_coasting: latest estimates of a track its constant-velocity fit '
+        'uses', low=2, high=MANY)
+    # A target walks ~1 m/step; its estimate errs ~1 m.
+    coast_gate: float = param(
+        4.0, 'additions.track_coasting: an estimate continues a track within this of the '
+        "track's fit (m)", low=0, low_open=True, high=100)
+    # 1/2 is the paper's n_hat = round(mass) rule for a target that existed: p_S^t >= 1/2 for
+    # t <= 68 steps at p_S = 0.99.
+    coast_survival: float = param(
+        0.5, 'additions.track_coasting: a track is reported while p_S^t, t steps after its last '
+        'estimate, is at least this', low=0, high=1, low_open=True)
+    coast_min_estimates: int = param(
+        3, 'additions.track_coasting: estimates a track needs before it is coasted', low=2,
+        high=MANY)
+    # p_D = 0.99 and two scans to confirm: a target there is estimated within two scans.
+    coast_misses: int = param(
+        2, "additions.track_coasting: steps a coasted position may lie in the agent's or a "
+        "neighbour's square without an estimate of it before the track is dropped", low=0,
+        high=MANY)
 
 
 @dataclass(frozen=True)
@@ -272,6 +293,11 @@ class CooperationParams:
     # Dev seeds 2001-2030 (random default): 0.1 / 0.3 / 0.5 gave detected 0.61 / 0.66 / 0.64,
     # entered 0.69 / 0.76 / 0.78, tracked 0.31 / 0.32 / 0.27, OSPA 6.76 / 6.70 / 7.06 m. The
     # persistent profile leaves the addition off (config/persistent.yaml says why).
+    # ~20 estimates pin a walk's velocity (phd.coast_history). Dev seeds 2001-2100 at random,
+    # paired with 20: 10 detected +3.5 points and tracked -2.3 (config/persistent.yaml).
+    follow_steps: int = param(
+        20, 'additions.track_coasting: a tracking agent returns to search once every target '
+        'in its square has a track of this many estimates', low=2, high=MANY)
     track_search_tolerance: float = param(
         0.3, 'additions.search_while_tracking: epsilon, the share of the best Renyi divergence '
         '(Eqn. track_control) a tracking agent may give up to cover search worth', low=0,
@@ -287,9 +313,9 @@ class AdditionsParams:
     """Switches of the additions to the paper (module docstring; one module each in beyond_paper/).
 
     True is config/paper.yaml (our detection chain), False is the paper as written
-    (config/paper_strict.yaml); the persistent search-and-track additions (the last four) are
-    False in both and True in config/persistent.yaml. Each switch is the only way to turn its
-    addition off.
+    (config/paper_strict.yaml); the persistent search-and-track additions (the last five) are
+    False in both, and config/persistent.yaml switches on all of them but search_while_tracking.
+    Each switch is the only way to turn its addition off.
     """
 
     peak_extraction: bool = _switch(
@@ -344,6 +370,12 @@ class AdditionsParams:
         False, 'a tracking agent with several targets leaves out of its tracking control the '
         'ones a neighbour in range tracks with a tighter estimate '
         '(beyond_paper/track_release.py)')
+    track_coasting: bool = param(
+        False, 'a target an agent estimated and no longer sees is still reported, where the '
+        "constant-velocity fit of its recent estimates puts it, until the agent's square or a "
+        'neighbour shows otherwise or p_S^t falls below phd.coast_survival; a tracking agent '
+        'returns to search once its targets have cooperation.follow_steps estimates '
+        '(beyond_paper/track_coasting.py)')
 
 
 @dataclass(frozen=True)

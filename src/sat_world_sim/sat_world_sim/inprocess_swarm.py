@@ -90,7 +90,7 @@ class InProcessSwarm:
             truth_positions=truth.positions,
             agent_poses=poses,
             modes={a: o.mode.name for a, o in outputs.items()},
-            estimates={a: o.report.target_positions() for a, o in outputs.items()},
+            estimates={a: o.reported_positions() for a, o in outputs.items()},
             plans={a: o.plan for a, o in outputs.items()},
             searched_fraction=searched,
             radio_messages={a: len(REPORT_KINDS) * receivers[a] for a in outputs},

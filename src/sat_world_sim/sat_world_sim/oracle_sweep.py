@@ -44,6 +44,14 @@ not released, that any agent has had in its square so far (not only one in its o
 flies to it at most v a step and follows it from then on: the team knows where every target it
 has seen is, as a swarm sharing perfect tracks would. Both keep the strips: an agent flies back
 to its own when it stops following. README (issue 15) has their figures: none meets the floors.
+
+With ``coast`` the agents also report the targets they saw and no longer see, as
+additions.track_coasting does (beyond_paper/track_coasting.py) but knowing the velocity: an
+agent that had a target in its square at step s reports x_s + v_s (k - s) T at k, while
+k - s <= track_coasting.coast_steps (p_S^t >= phd.coast_survival), the target is in no square
+(else the agent seeing it reports it), the point is not in the agent's own square (it would
+see the target there) and inside the area. A target that died out of view is reported on (a
+false track) until one of these ends it, as the addition's track would be.
 """
 
 import time
@@ -51,6 +59,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from sat_agent.beyond_paper.track_coasting import coast_steps
 from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION, VELOCITY
 from sat_agent.search_map import SearchMap
@@ -187,12 +196,14 @@ def _assign_followers(team, truth, poses, in_view: dict, row: int, released: set
 
 def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int] = None,
                      follow: bool = False, follow_limit: Optional[int] = None,
-                     followers: Optional[int] = None, dispatch: bool = False) -> SwarmRun:
+                     followers: Optional[int] = None, dispatch: bool = False,
+                     coast: bool = False) -> SwarmRun:
     """Run the oracle sweep (follow: sweep-and-track) over the scenario's truth (docstring).
 
     follow_limit: the most steps an agent follows one target (None: until it dies).
     followers: how many agents may follow, the highest ids (None: all of them).
     dispatch: free followers take any target seen so far, not only one in their square.
+    coast: report the targets seen before and out of view now (module docstring).
 
     Records as the in-process swarm's. The truth is the World's, so for a seed the oracle meets
     the same targets as every policy. final_density is the coverage (1 where some square has
@@ -216,6 +227,7 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
     chasers = {agent_id: team[agent_id] for agent_id in sorted(ids)[len(ids) - count:]}
     released = set()
     known = set() if dispatch else None
+    coasting = _Coasting(params) if coast else None
     records = []
     for row in range(steps):
         truth = world.truth()
@@ -238,7 +250,8 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
             step=world.step, truth_ids=truth.ids, truth_positions=truth.positions,
             agent_poses=poses,
             modes={a: MODE if team[a].target is None else FOLLOW_MODE for a in ids},
-            estimates={a: truth.positions[in_view[a]] for a in ids},
+            estimates={a: truth.positions[in_view[a]] for a in ids} if coasting is None
+            else coasting.estimates(world.step, truth, poses, in_view),
             searched_fraction=world.searched_fraction()))
         if row + 1 < steps:
             world.place_agents({a: _next_position(team[a], poses[a], truth, speed, params)
@@ -254,3 +267,37 @@ def _next_position(sweeper: _Sweeper, pose, truth, speed: float,
         return sweeper.next_sweep_position()
     (row,) = np.flatnonzero(truth.ids == sweeper.target)
     return follow_position(pose, truth.states[row], speed, params)
+
+
+class _Coasting:
+    """The oracle's coasted reports (module docstring): per agent, target id -> (s, x_s, v_s)."""
+
+    def __init__(self, params: SatParams):
+        self.params = params
+        self.seen = {}
+
+    def estimates(self, step: int, truth, poses, in_view: dict) -> dict:
+        """Return agent id -> its in-square true positions and its coasted points at step."""
+        params, area = self.params, self.params.area
+        in_any = np.any(list(in_view.values()), axis=0) if in_view else np.zeros(0, bool)
+        visible = set(truth.ids[in_any].tolist())
+        result = {}
+        for agent_id in sorted(in_view):
+            seen = self.seen.setdefault(agent_id, {})
+            for row in np.flatnonzero(in_view[agent_id]):
+                state = truth.states[row]
+                seen[int(truth.ids[row])] = (step, state[list(POSITION)], state[list(VELOCITY)])
+            coasted = []
+            for target_id, (since, position, velocity) in list(seen.items()):
+                if since == step:
+                    continue
+                point = position + velocity * (step - since) * params.motion.dt
+                if (step - since > coast_steps(params) or target_id in visible
+                        or in_sensing_square(point, poses[agent_id], params.sensor.square_side)
+                        or not (0.0 <= point[0] <= area.width and 0.0 <= point[1] <= area.height)):
+                    del seen[target_id]
+                    continue
+                coasted.append(point)
+            result[agent_id] = np.vstack([truth.positions[in_view[agent_id]],
+                                          np.reshape(coasted, (-1, 2))])
+        return result

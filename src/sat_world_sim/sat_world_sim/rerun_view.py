@@ -274,6 +274,10 @@ class SwarmLogger:
             ellipses.append(_ellipse(centre, cov))
         log(f'{base}/spread', rr.LineStrips2D(ellipses, colors=[colour], radii=[0.15],
                                               draw_order=44.0))
+        # Targets reported out of view (additions.track_coasting): fainter and smaller.
+        log(f'{base}/coasted', rr.Points2D(
+            [_xy(p) for p in status.coasted], colors=[colour + (140,)], radii=[0.5],
+            draw_order=43.0))
         particles = np.asarray(status.particle_xy, dtype=np.float32).reshape(-1, 2)
         log(f'{base}/particles', rr.Points2D(
             particles, colors=[colour + (90,)], radii=[0.15], draw_order=35.0))

@@ -77,7 +77,7 @@ from sat_agent.node_params import AgentNodeParams
 from sat_agent.ros import views
 from sat_agent.ros.input_guard import InputGuard, LOG_THROTTLE_S
 from sat_agent.ros.message_limits import MessageLimits, STATUS_PARTICLES
-from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage,
+from sat_agent.ros.msg_conversions import (estimate_to_msg, header, InvalidMessage, MAX_TARGETS,
                                            measurements_from_msg, message_class, point,
                                            RADIO_TYPES, report_from_parts, report_to_msgs)
 from sat_agent.ros.node_runner import (all_acked, FINAL_ACK_TIMEOUT_S, finish_run, run_nodes,
@@ -363,6 +363,7 @@ class AgentNode(Node):
             position=point(pose), plan=[point(p) for p in output.plan],
             group=sorted(self.core.planner.group),
             estimate=estimate_to_msg(self.agent_id, step, pose, output.estimate, self.dt),
+            coasted=[point(p) for p in output.coasted[:MAX_TARGETS]],
             particle_xy=targets.states[keep][:, (0, 2)].astype(np.float32).ravel(),
             particle_weights=targets.weights[keep].astype(np.float32),
             yielded_to=output.left_overlap_with or 0, compute_time=compute_time)

@@ -78,6 +78,7 @@ class MessageLimits:
             mode=_size(AgentMode(header=_header())),
             status=_size(AgentStatus(
                 header=_header(), plan=[Point()] * (nodes + 1), group=ids, estimate=_estimate(),
+                coasted=[Point()] * MAX_TARGETS,
                 particle_xy=[0.0] * (2 * STATUS_PARTICLES),
                 particle_weights=[0.0] * STATUS_PARTICLES)),
             step=_size(WorldStep(header=_header(), scenario='x' * MAX_NAME)),

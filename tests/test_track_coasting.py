@@ -1,0 +1,157 @@
+"""Track coasting (beyond_paper/track_coasting.py): follow, search on, report the walk."""
+
+import numpy as np
+import pytest
+
+from sat_agent.agent_core import Agent
+from sat_agent.beyond_paper.track_coasting import (
+    coast_steps, NoCoasting, Track, TrackCoasting)
+from sat_agent.config import load_params_file
+from sat_agent.mode_machine import Mode
+from sat_agent.sensor_model import measure
+from sat_agent.state_extraction import TargetEstimate
+
+PARAMS = load_params_file('config/persistent.yaml').with_overrides(
+    {'additions.track_coasting': True})
+FAR = np.array([90.0, 90.0])           # an agent pose whose square sees none of the targets
+VELOCITY = np.array([0.6, -0.3])
+NONE = np.zeros((0, 2))
+
+
+def _estimate(position, velocity=(0.0, 0.0)):
+    return TargetEstimate(np.asarray(position, float), np.asarray(velocity, float),
+                          np.eye(4), 1.0)
+
+
+def _walk(step, start=(20.0, 40.0)):
+    return np.asarray(start) + step * VELOCITY
+
+
+def _follow(coasting, steps, pose_of=lambda k: _walk(k), noise=0.0, seed=0):
+    """Feed one estimate a step of the walk (seen from a square centred on it)."""
+    rng = np.random.default_rng(seed)
+    result = None
+    for k in range(1, steps + 1):
+        seen = _walk(k) + noise * rng.standard_normal(2)
+        result = coasting.update(k, pose_of(k), [_estimate(seen, VELOCITY)], NONE, NONE)
+    return result
+
+
+def test_the_fit_is_least_squares_and_its_spread_shrinks_with_the_estimates():
+    steps = list(range(1, 11))
+    track = Track(steps, [_walk(k) for k in steps], np.zeros(2))
+    np.testing.assert_allclose(track.predict(40), _walk(40))
+    # With noise the fit equals numpy's least-squares line.
+    rng = np.random.default_rng(3)
+    noisy = [_walk(k) + rng.normal(0.0, 1.0, 2) for k in steps]
+    track = Track(steps, noisy, np.zeros(2))
+    expected = [np.polyval(np.polyfit(steps, np.array(noisy)[:, i], 1), 40) for i in range(2)]
+    np.testing.assert_allclose(track.predict(40), expected)
+    # One estimate: its filter velocity carries it.
+    single = Track([5], [_walk(5)], VELOCITY.copy())
+    np.testing.assert_allclose(single.predict(9), _walk(9))
+
+
+def test_coast_steps_follow_p_s():
+    # 0.99^68 = 0.505 >= 1/2 > 0.99^69.
+    assert coast_steps(PARAMS) == 68
+    assert coast_steps(PARAMS.with_overrides({'phd.coast_survival': 0.9})) == 10
+    assert coast_steps(PARAMS.with_overrides({'motion.p_survival': 1.0})) > 10 ** 9
+
+
+def test_a_target_out_of_view_is_reported_on_its_walk_until_p_s_says_it_may_be_gone():
+    coasting = TrackCoasting(PARAMS)
+    step = _follow(coasting, 20, noise=0.5)
+    assert step.coasted.shape == (0, 2) and step.fresh == 0      # 20 estimates: followed
+    horizon = coast_steps(PARAMS)
+    for k in range(21, 21 + horizon):
+        step = coasting.update(k, FAR, [], NONE, NONE)
+        assert len(step.coasted) == 1, k
+        # 20 estimates erring 0.5 m pin the walk: within 2 m even 68 steps on.
+        assert np.hypot(*(step.coasted[0] - _walk(k))) < 2.0, k
+        np.testing.assert_allclose(step.expected, [coasting.tracks[0].predict(k + 1)])
+    assert len(coasting.update(21 + horizon, FAR, [], NONE, NONE).coasted) == 0
+    assert coasting.tracks == []
+
+
+def test_a_track_needs_a_few_estimates_and_fresh_counts_the_short_ones():
+    coasting = TrackCoasting(PARAMS)
+    assert _follow(coasting, 2).fresh == 1
+    # Two estimates are below phd.coast_min_estimates (3): nothing coasted, track dropped.
+    assert len(coasting.update(3, FAR, [], NONE, NONE).coasted) == 0
+    coasting = TrackCoasting(PARAMS)
+    assert _follow(coasting, PARAMS.cooperation.follow_steps - 1).fresh == 1
+    assert _follow(TrackCoasting(PARAMS), PARAMS.cooperation.follow_steps).fresh == 0
+
+
+def test_looking_there_and_not_seeing_it_or_a_neighbour_seeing_it_ends_the_report():
+    coasting = TrackCoasting(PARAMS)
+    _follow(coasting, 20)
+    misses = PARAMS.phd.coast_misses
+    for k in range(21, 22 + misses):
+        # The agent's square over the walk, and no estimate: a miss each scan.
+        reported = coasting.update(k, _walk(k), [], NONE, NONE).coasted
+        assert len(reported) == (1 if k - 20 <= misses else 0), k
+    # A neighbour's square counts as looking there.
+    coasting = TrackCoasting(PARAMS)
+    _follow(coasting, 20)
+    for k in range(21, 22 + misses):
+        reported = coasting.update(k, FAR, [], _walk(k)[None] + 2.0, NONE).coasted
+        assert len(reported) == (1 if k - 20 <= misses else 0), k
+    coasting = TrackCoasting(PARAMS)
+    _follow(coasting, 20)
+    neighbour = _walk(21)[None] + 1.0
+    assert len(coasting.update(21, FAR, [], NONE, neighbour).coasted) == 0
+    # A walk that leaves the area is not reported beyond it.
+    coasting = TrackCoasting(PARAMS)
+    _follow(coasting, 20)
+    steps_out = int(np.ceil(_walk(20)[1] / -VELOCITY[1])) + 1
+    assert len(coasting.update(20 + steps_out, FAR, [], NONE, NONE).coasted) == 0
+
+
+def test_an_estimate_continues_the_nearest_track_one_to_one():
+    coasting = TrackCoasting(PARAMS)
+    _follow(coasting, 10)
+    other = np.array([70.0, 20.0])
+    step = coasting.update(11, _walk(11), [_estimate(other), _estimate(_walk(11) + 0.5)],
+                           NONE, NONE)
+    assert len(coasting.tracks) == 2 and step.fresh == 2
+    lengths = sorted(track.length for track in coasting.tracks)
+    assert lengths == [1, 11]
+
+
+def test_the_papers_agent_coasts_nothing():
+    step = NoCoasting().update(4, FAR, [_estimate(FAR)], NONE, NONE)
+    assert step.fresh == 1 and step.coasted.shape == (0, 2) and step.expected.shape == (0, 2)
+    assert isinstance(Agent(1, load_params_file('config/paper.yaml'), FAR).coasting,
+                      NoCoasting)
+    assert isinstance(Agent(1, PARAMS, FAR).coasting, TrackCoasting)
+
+
+@pytest.mark.parametrize('coast', [False, True])
+def test_a_followed_target_releases_the_tracker_to_search(coast):
+    """A lone target walks slowly under an agent held still.
+
+    With coasting the agent returns to SEARCH once it has follow_steps estimates, still
+    estimating the target; without, it tracks on.
+    """
+    params = PARAMS.with_overrides({'additions.track_coasting': coast,
+                                    'sensor.clutter_rate': 0.0})
+    start = np.array([50.0, 50.0])
+    agent = Agent(1, params, start, seed=5)
+    rng = np.random.default_rng(0)
+    modes, reported = [], []
+    for k in range(1, 41):
+        truth = start + np.array([2.0, 1.0]) + (k - 1) * np.array([0.1, 0.0])
+        measurement = measure(truth[None], start) + [0.1 * rng.standard_normal(), 0.0]
+        output = agent.step(k, start, measurement, [])
+        modes.append(output.mode)
+        reported.append(len(output.reported_positions()))
+    follow = params.cooperation.follow_steps
+    assert Mode.TRACK in modes
+    if coast:
+        first_track = modes.index(Mode.TRACK)
+        assert Mode.SEARCH in modes[first_track:first_track + follow + 3]
+        assert min(reported[first_track + 2:]) >= 1      # the target stays reported
+    else:
+        assert modes[-1] == Mode.TRACK
