@@ -254,8 +254,9 @@ class Agent:
             step, pose, estimate.targets, [r.pose for r in reports], np.vstack(
                 [np.zeros((0, 2))] + [r.predicted_positions(self.params.motion.dt)
                                       for r in reports]))
-        self.extractor.memory = replace(self.extractor.memory, expected=np.vstack(
-            [self.extractor.memory.expected, coasting.expected]))
+        if len(coasting.expected):
+            self.extractor.memory = replace(self.extractor.memory, expected=np.vstack(
+                [self.extractor.memory.expected, coasting.expected]))
         for report in late + reports:
             self.filter.search.fuse(self._density_at(step, report))
         searchers = self._searchers(reports)

@@ -192,7 +192,8 @@ class PhdParams:
     tentative_threshold: float = param(
         0.2, 'additions.investigation: unconfirmed peaks in the square with this mass are '
         'tentative', low=0, high=0.5)
-    # 20 estimates 1 m apart in error pin a straight walk's velocity to ~4 cm/s.
+    # 20 estimates erring 1 m pin a straight walk's velocity to ~4 cm/s; 50 keeps what later
+    # passes over the target add.
     coast_history: int = param(
         50, 'additions.track_coasting: latest estimates of a track its constant-velocity fit '
         'uses', low=2, high=MANY)

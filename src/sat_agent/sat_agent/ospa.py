@@ -60,3 +60,20 @@ def ospa(x, y, cutoff: float, order: float = 2) -> OspaResult:
     return OspaResult(float((localisation_p + cardinality_p) ** (1.0 / order)),
                       float(localisation_p ** (1.0 / order)),
                       float(cardinality_p ** (1.0 / order)))
+
+
+def gated_pairs(first: np.ndarray, second: np.ndarray, gate: float):
+    """One-to-one (row of first, row of second) pairs at most gate apart, nearest overall.
+
+    linear_sum_assignment on the distances, where a pair beyond the gate costs more than any sum
+    of pairs within it, so it is never chosen over one within; returns two int arrays.
+    """
+    first = np.asarray(first, dtype=float).reshape(-1, 2)
+    second = np.asarray(second, dtype=float).reshape(-1, 2)
+    if not len(first) or not len(second):
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    gaps = np.linalg.norm(first[:, None, :] - second[None, :, :], axis=2)
+    cost = np.where(gaps <= gate, gaps, gate * (len(first) + len(second) + 1))
+    rows, cols = linear_sum_assignment(cost)
+    close = gaps[rows, cols] <= gate
+    return rows[close], cols[close]

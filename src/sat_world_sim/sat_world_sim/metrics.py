@@ -15,8 +15,9 @@ Definitions (the paper leaves them open):
   estimate; both empty gives 0, so steps with nothing to find and nothing claimed score 0.
 - ``first_in_view``: first step the target's true position is inside some agent's sensing square.
 - Estimate of a target: each agent's estimates are assigned one-to-one to the true targets
-  (``linear_sum_assignment`` on the distances, pairs farther than ``detection_radius`` do not
-  count), so an estimate of one target never also counts for a second target next to it.
+  (``ospa.gated_pairs``: ``linear_sum_assignment`` on the distances, pairs farther than
+  ``detection_radius`` do not count), so an estimate of one target never also counts for a
+  second target next to it.
 - ``first_detected``: first step, at or after the target's birth, with some agent's estimate
   assigned to the target.
 - ``detection_delay`` = first_detected - first_in_view (None when either is None).
@@ -39,9 +40,8 @@ import json
 from typing import Dict, List, Mapping, Optional, Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
-from sat_agent.ospa import ospa
+from sat_agent.ospa import gated_pairs, ospa
 from sat_agent.sensor_model import in_sensing_square
 
 
@@ -211,16 +211,9 @@ def _trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: f
     false = 0
     for estimate in estimates.values():
         found = np.asarray(estimate, dtype=float).reshape(-1, 2)
-        assigned = 0
-        if len(points) and len(found):
-            gaps = np.linalg.norm(points[:, None, :] - found[None, :, :], axis=2)
-            # Beyond the radius an assignment is worth nothing: a cost above any sum within it.
-            cost = np.where(gaps <= radius, gaps, radius * (len(points) + len(found) + 1))
-            rows, cols = linear_sum_assignment(cost)
-            hits = rows[gaps[rows, cols] <= radius]
-            counts[hits] += 1
-            assigned = len(hits)
-        false += len(found) - assigned
+        hits, _ = gated_pairs(points, found, radius)
+        counts[hits] += 1
+        false += len(found) - len(hits)
     return counts, false
 
 

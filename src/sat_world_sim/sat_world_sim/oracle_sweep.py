@@ -59,6 +59,7 @@ from typing import List, Optional
 
 import numpy as np
 
+from sat_agent.actions import inside_area
 from sat_agent.beyond_paper.track_coasting import coast_steps
 from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION, VELOCITY
@@ -278,7 +279,7 @@ class _Coasting:
 
     def estimates(self, step: int, truth, poses, in_view: dict) -> dict:
         """Return agent id -> its in-square true positions and its coasted points at step."""
-        params, area = self.params, self.params.area
+        params = self.params
         in_any = np.any(list(in_view.values()), axis=0) if in_view else np.zeros(0, bool)
         visible = set(truth.ids[in_any].tolist())
         result = {}
@@ -294,7 +295,7 @@ class _Coasting:
                 point = position + velocity * (step - since) * params.motion.dt
                 if (step - since > coast_steps(params) or target_id in visible
                         or in_sensing_square(point, poses[agent_id], params.sensor.square_side)
-                        or not (0.0 <= point[0] <= area.width and 0.0 <= point[1] <= area.height)):
+                        or not inside_area(point, params.area)[0]):
                     del seen[target_id]
                     continue
                 coasted.append(point)

@@ -8,7 +8,7 @@ Addition, three parts:
 
 1. Tracks. Each agent keeps a short track of every target it estimated: its estimates of the
    last ``phd.coast_history`` steps, continued from step to step by the nearest estimate
-   within ``phd.coast_gate`` of the track's fit (one-to-one, ``linear_sum_assignment``).
+   within ``phd.coast_gate`` of the track's fit (one-to-one, ``ospa.gated_pairs``).
 2. Coasting. A track of at least ``phd.coast_min_estimates`` estimates (fewer give no
    velocity to trust: a clutter-born track or a glimpse) without an estimate at step k is
    reported at the position its least-squares constant-velocity fit gives for k, while
@@ -47,9 +47,10 @@ from dataclasses import dataclass, field
 from typing import List, Sequence
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
+from sat_agent.actions import inside_area
 from sat_agent.config import SatParams
+from sat_agent.ospa import gated_pairs
 from sat_agent.sensor_model import in_sensing_square
 
 
@@ -131,7 +132,7 @@ class TrackCoasting:
         phd = self.params.phd
         positions = np.array([t.position for t in estimates], dtype=float).reshape(-1, 2)
         predicted = np.array([track.predict(step) for track in self.tracks]).reshape(-1, 2)
-        pairs = _associate(predicted, positions, phd.coast_gate)
+        pairs = list(zip(*gated_pairs(predicted, positions, phd.coast_gate)))
         fresh = len(estimates)
         side = self.params.sensor.square_side
         looked = np.vstack([np.reshape(pose, (1, 2)), np.reshape(neighbour_poses, (-1, 2))])
@@ -169,21 +170,10 @@ class TrackCoasting:
     def _believed(self, track: Track, position: np.ndarray, step: int,
                   neighbour_targets) -> bool:
         """Whether a track without an estimate at step is still reported (module docstring)."""
-        area = self.params.area
         neighbours = np.asarray(neighbour_targets, dtype=float).reshape(-1, 2)
         return (step - track.steps[-1] <= coast_steps(self.params)
                 and track.length >= self.params.phd.coast_min_estimates
                 and track.misses <= self.params.phd.coast_misses
-                and 0.0 <= position[0] <= area.width and 0.0 <= position[1] <= area.height
+                and inside_area(position, self.params.area)[0]
                 and not (len(neighbours) and np.min(np.hypot(*(neighbours - position).T))
                          <= self.params.phd.coast_gate))
-
-
-def _associate(predicted: np.ndarray, estimates: np.ndarray, gate: float):
-    """One-to-one (track row, estimate row) pairs closer than gate, nearest overall."""
-    if not len(predicted) or not len(estimates):
-        return []
-    gaps = np.linalg.norm(predicted[:, None, :] - estimates[None, :, :], axis=2)
-    cost = np.where(gaps <= gate, gaps, gate * (len(predicted) + len(estimates) + 1))
-    rows, cols = linear_sum_assignment(cost)
-    return [(int(r), int(c)) for r, c in zip(rows, cols) if gaps[r, c] <= gate]
