@@ -21,11 +21,16 @@ def spots(position, mass) -> BirthSpots:
                       np.array([mass]))
 
 
+def tentative(estimate: TargetEstimate) -> MultiTargetEstimate:
+    """Return an estimate with no confirmed target and this one tentative peak."""
+    return MultiTargetEstimate((), 0.0, (estimate,), (0,))
+
+
 def test_a_tentative_peak_is_followed_with_the_tracking_control_until_the_budget_is_spent():
     params = SatParams()
     budget = params.search.investigate_steps
     look = Investigation(params)
-    seen = MultiTargetEstimate((), 0.0, (peak((50.0, 50.0)),), (0,))
+    seen = tentative(peak((50.0, 50.0)))
     for step in range(budget):
         followed = look.look(Mode.SEARCH, seen, 0, BirthSpots.empty())
         assert followed.keep is None, step
@@ -34,7 +39,7 @@ def test_a_tentative_peak_is_followed_with_the_tracking_control_until_the_budget
     # ignored for 2 * budget steps, one elsewhere is looked at.
     assert look.look(Mode.SEARCH, seen, 0, BirthSpots.empty()) is NO_LOOK
     assert look.look(Mode.SEARCH, seen, 0, BirthSpots.empty()) is NO_LOOK
-    elsewhere = MultiTargetEstimate((), 0.0, (peak((80.0, 20.0)),), (0,))
+    elsewhere = tentative(peak((80.0, 20.0)))
     np.testing.assert_allclose(
         look.look(Mode.SEARCH, elsewhere, 0, BirthSpots.empty()).peaks.positions(), [[80.0, 20.0]])
 
@@ -43,8 +48,7 @@ def test_a_peak_that_fades_for_a_scan_is_kept_in_view_one_step_by_the_search_mov
     params = SatParams()
     look = Investigation(params)
     walking = peak((50.0, 50.0), velocity=(1.0, 0.5))
-    first = look.look(Mode.SEARCH, MultiTargetEstimate((), 0.0, (walking,), (0,)), 0,
-                      BirthSpots.empty())
+    first = look.look(Mode.SEARCH, tentative(walking), 0, BirthSpots.empty())
     assert first.keep is None
     np.testing.assert_allclose(first.peaks.positions(), [[51.0, 50.5]])
     # Gone from the next scan (a miss, a near pass): kept in the next square where its walk
@@ -59,10 +63,9 @@ def test_a_peak_that_fades_for_a_scan_is_kept_in_view_one_step_by_the_search_mov
     assert look.look(Mode.SEARCH, NOTHING, 0, BirthSpots.empty()) is NO_LOOK
     # Back after one scan: followed with the tracking control again.
     again = Investigation(params)
-    again.look(Mode.SEARCH, MultiTargetEstimate((), 0.0, (walking,), (0,)), 0, BirthSpots.empty())
+    again.look(Mode.SEARCH, tentative(walking), 0, BirthSpots.empty())
     again.look(Mode.SEARCH, NOTHING, 0, BirthSpots.empty())
-    back = again.look(Mode.SEARCH, MultiTargetEstimate((), 0.0, (peak((52.0, 51.0)),), (0,)), 0,
-                      BirthSpots.empty())
+    back = again.look(Mode.SEARCH, tentative(peak((52.0, 51.0))), 0, BirthSpots.empty())
     assert back.keep is None
     np.testing.assert_allclose(back.peaks.positions(), [[52.0, 51.0]])
 
@@ -83,7 +86,7 @@ def test_a_newborn_spot_gets_one_step_and_a_light_one_none():
 
 def test_nothing_is_looked_at_while_tracking_or_in_the_rejoin_cooldown():
     params = SatParams()
-    tentative = MultiTargetEstimate((), 0.0, (peak((50.0, 50.0)),), (0,))
+    seen = tentative(peak((50.0, 50.0)))
     for mode, cooldown in ((Mode.TRACK, 0), (Mode.SEARCH, 3)):
-        result = Investigation(params).look(mode, tentative, cooldown, spots((50.0, 50.0), 0.4))
+        result = Investigation(params).look(mode, seen, cooldown, spots((50.0, 50.0), 0.4))
         assert result.peaks is None and result.keep is None
