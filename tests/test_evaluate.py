@@ -268,3 +268,39 @@ def test_bad_arguments_are_refused_with_exit_code_2(tmp_path, capsys):
     readme.write_text('# no markers\n')
     assert main(['--readme', str(readme), '--out', str(tmp_path)]) == 2
     assert 'markers' in capsys.readouterr().err
+
+
+def test_a_trial_adds_its_values_to_every_cell_and_names_them_in_the_label():
+    cell = default_cell('random', 'SAT-PHD persistent', profile='persistent',
+                        overrides=(('phd.birth_velocity_std', 2.0),))
+    (trial,) = study_design.with_values([cell], (('phd.birth_velocity_std', 0.5),
+                                                 ('search.replan_period', 5)))
+    assert trial.label == ('SAT-PHD persistent with phd.birth_velocity_std=0.5; '
+                           'search.replan_period=5')
+    params = trial.params(load_params_file(CONFIG / 'persistent.yaml'))
+    assert params.phd.birth_velocity_std == 0.5 and params.search.replan_period == 5
+    assert study_design.with_values([cell], ()) == [cell]
+
+
+def test_a_trial_runs_under_its_own_label_into_its_own_directory(tmp_path):
+    base = ['--quick', '--seeds', '1', '--jobs', '1', '--config', str(CONFIG),
+            '--costs', str(tmp_path / 'no'), '--only', 'paper/SAT-PHD (cooperative)']
+    assert main(base + ['--set', 'phd.birth_velocity_std=0.5', '--out', str(tmp_path)]) == 0
+    (row,) = read_rows(tmp_path / RUNS_CSV)
+    assert row['label'] == 'SAT-PHD (cooperative) with phd.birth_velocity_std=0.5'
+    assert row['overrides'] == 'phd.birth_velocity_std=0.5'
+
+
+def test_a_trial_is_refused_bad_values_and_the_committed_study(tmp_path, capsys):
+    out = ['--out', str(tmp_path)]
+    for item, told in (('phd.nothing=1', 'unknown parameter'),
+                       ('phd.birth_velocity_std=-1', 'allowed range is [0, 100]'),
+                       ('phd.birth_velocity_std', 'expected KEY=VALUE'),
+                       ('phd.birth_velocity_std=[1', 'not YAML')):
+        assert main(['--set', item] + out) == 2
+        assert told in capsys.readouterr().err
+    assert main(['--set', 'phd.birth_velocity_std=0.5', '--dry-run']) == 2
+    assert 'not docs/' in capsys.readouterr().err
+    assert main(['--set', 'phd.birth_velocity_std=0.5', '--readme', 'README.md'] + out) == 2
+    assert 'no --readme' in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())

@@ -22,8 +22,8 @@ ROS_MODULE = re.compile(r'^(rclpy|rosidl_\w+|rmw\w*|launch|launch_ros|\w+_msgs|\
                         r'sat_agent\.ros|sat_world_sim\.ros)(\.|$)')
 EXECUTABLES = {
     'sat_agent': {'agent', 'agents_composed'},
-    'sat_world_sim': {'evaluate', 'inprocess_swarm', 'logger', 'metrics', 'recorder', 'replay',
-                      'swarm', 'world_sim'},
+    'sat_world_sim': {'compare_runs', 'evaluate', 'inprocess_swarm', 'logger', 'metrics',
+                      'recorder', 'replay', 'swarm', 'world_sim'},
 }
 
 

@@ -29,6 +29,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
+            'compare_runs = sat_world_sim.run_comparison:main',
             'evaluate = sat_world_sim.evaluate:main',
             'inprocess_swarm = sat_world_sim.inprocess_swarm:main',
             'logger = sat_world_sim.ros.logger_node:main',

@@ -22,10 +22,14 @@ markers. ``--tables-only`` runs nothing: it writes the tables of ``--out``'s eva
 again, into that summary (with its per-cell and cost sections) and ``--readme`` (after a change
 to the tables, or to rows merged from runs made apart).
 
-    evaluate [--design default|full|factorial] [--only SETTING/LABEL ...] [--seeds 50]
-             [--first-seed 1] [--jobs N] [--scheduler local|tcp://HOST:PORT] [--out docs]
-             [--config config] [--readme README.md] [--quick | --steps N] [--costs CSV]
-             [--dry-run] [--list] [--tables-only]
+    evaluate [--design default|full|factorial] [--only SETTING/LABEL ...] [--set KEY=VALUE ...]
+             [--seeds 50] [--first-seed 1] [--jobs N] [--scheduler local|tcp://HOST:PORT]
+             [--out docs] [--config config] [--readme README.md] [--quick | --steps N]
+             [--costs CSV] [--dry-run] [--list] [--tables-only]
+
+A trial (``--set KEY=VALUE``, e.g. the README's dev-seed figures) runs the chosen cells with
+further parameters into another --out; ``scripts/compare_runs.py`` then pairs its rows with a
+run of the cells as they are, seed by seed (run_comparison.py).
 """
 
 import argparse
@@ -55,6 +59,7 @@ from sat_world_sim.study_design import catalogue, Cell, CONFIG_COLUMNS, DESIGNS,
 from sat_world_sim.study_design import ORACLES
 from sat_world_sim.study_design import prepare_cells
 from sat_world_sim.study_design import scenario_for, SEEDS, select, STEPS, with_steps
+from sat_world_sim.study_design import with_values
 
 QUICK_STEPS = 15
 # Columns of evaluation.csv after CONFIG_COLUMNS and the seed: metrics.py's summary, the area
@@ -345,12 +350,44 @@ def rewrite_tables(out: Path, readme: Optional[str]) -> str:
 
 # ---------------------------------------------------------------- command line
 
+def trial_values(items: Sequence[str], out, readme) -> Tuple[Tuple[str, object], ...]:
+    """Parse ``--set KEY=VALUE`` items (VALUE is YAML) and check them against the schema.
+
+    ValueError (ParameterError: which parameter, what value, what is allowed) for a malformed
+    item or a value the core refuses; a trial is refused an --out of docs/ or a --readme,
+    which hold the committed study.
+    """
+    import yaml
+
+    values = []
+    for item in items:
+        key, sep, text = item.partition('=')
+        if not sep or not key.strip():
+            raise ValueError(f'--set {item!r}: expected KEY=VALUE, e.g. '
+                             'phd.birth_velocity_std=0.5')
+        try:
+            values.append((key.strip(), yaml.safe_load(text)))
+        except yaml.YAMLError as problem:
+            raise ValueError(f'--set {item!r}: the value is not YAML: {problem}') from None
+    if not values:
+        return ()
+    SatParams().with_overrides(dict(values))
+    if Path(out).resolve() == Path('docs').resolve() or readme:
+        raise ValueError('--set makes trial cells, not the committed study: give --out DIR '
+                         '(not docs/) and no --readme')
+    return tuple(values)
+
+
 def _arguments(argv):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--design', choices=sorted(DESIGNS), default='default',
                         help='which cells (study_design.py; default: the make evaluate study)')
     parser.add_argument('--only', action='append', default=[], metavar='SETTING/LABEL',
                         help="run this cell only (repeatable; any design's cell)")
+    parser.add_argument('--set', action='append', default=[], metavar='KEY=VALUE',
+                        help='a trial: run the cells with this dotted parameter too, e.g. '
+                             'phd.birth_velocity_std=0.5 (repeatable; labels gain "with '
+                             'KEY=VALUE"; needs an --out other than docs)')
     parser.add_argument('--list', action='store_true', help='list every cell and exit')
     parser.add_argument('--tables-only', action='store_true',
                         help="run nothing: write the tables of --out's evaluation.csv again "
@@ -420,6 +457,7 @@ def main(argv=None) -> int:
         if problems:
             raise ValueError('; '.join(problems))
         cells = with_steps(select(args.only) if args.only else DESIGNS[args.design], args.steps)
+        cells = with_values(cells, trial_values(args.set, args.out, args.readme))
         paper = load_scenario(Path(args.config) / 'scenarios' / 'paper.yaml')
         if args.readme:
             _readme_parts(Path(args.readme))   # refuse a README without markers before the runs

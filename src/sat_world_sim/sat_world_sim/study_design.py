@@ -295,6 +295,19 @@ def with_steps(cells: Sequence[Cell], steps: int) -> List[Cell]:
     return [replace(cell, steps=steps) for cell in cells]
 
 
+def with_values(cells: Sequence[Cell], values: Sequence[Tuple[str, Any]]) -> List[Cell]:
+    """Return the cells with further dotted parameters (``evaluate --set``), labelled by them.
+
+    The label gains " with KEY=VALUE; ...", so rows of a trial never pass for the cell's own
+    rows; a key the cell already sets takes the new value (later overrides win).
+    """
+    if not values:
+        return list(cells)
+    told = '; '.join(f'{key}={value}' for key, value in values)
+    return [replace(cell, label=f'{cell.label} with {told}',
+                    overrides=cell.overrides + tuple(values)) for cell in cells]
+
+
 def prepare_cells(cells: Sequence[Cell], config_dir) -> Tuple[List[Tuple[Cell, SatParams]],
                                                               List[Tuple[Cell, str]]]:
     """Build each cell's parameters from ``config_dir/<profile>.yaml``.
