@@ -1,4 +1,3 @@
-import csv
 from dataclasses import field, make_dataclass
 from pathlib import Path
 
@@ -8,6 +7,7 @@ from sat_agent.config import load_params_file, SatParams
 from sat_world_sim import study_design
 from sat_world_sim.evaluate import cost_model, estimate, main, METRIC_WORDS, METRICS
 from sat_world_sim.evaluate import QUICK_STEPS, RUNS_CSV, SUMMARY_MD, TABLE_MARKERS, TARGETS_CSV
+from sat_world_sim.evaluate import read_rows, write_csv
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
@@ -187,11 +187,6 @@ def test_the_estimate_uses_measured_costs_per_agent_step():
     assert cost_model([])(Cell('random', 'x')) is None
 
 
-def read_rows(path):
-    with open(path, encoding='utf-8') as stream:
-        return list(csv.DictReader(stream))
-
-
 ONLY = ['random/SAT-PHD (cooperative)', 'random/lawnmower', 'random/oracle sweep',
         'paper/SAT-PHD (cooperative)', 'paper_random/SAT-PHD (cooperative)']
 
@@ -245,10 +240,7 @@ def test_the_dask_cluster_writes_the_same_rows_as_the_process_pool(tmp_path):
 def test_dry_run_prints_the_run_count_and_estimate_without_running(tmp_path, capsys):
     costs = tmp_path / 'costs.csv'
     rows = [dict(Cell('random', 'SAT-PHD (cooperative)').columns(), seed=1, cpu_time_s=6.0)]
-    with open(costs, 'w', newline='', encoding='utf-8') as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(rows, costs, list(rows[0]))
     assert main(['--design', 'factorial', '--dry-run', '--costs', str(costs),
                  '--config', str(CONFIG), '--jobs', '2', '--out', str(tmp_path / 'x')]) == 0
     err = capsys.readouterr().err

@@ -1,8 +1,7 @@
-import csv
-
 import numpy as np
 import pytest
 
+from sat_world_sim.evaluate import write_csv
 from sat_world_sim.run_comparison import compare_runs, comparison_table, main
 
 
@@ -58,16 +57,10 @@ def test_runs_that_share_no_setting_or_seed_are_refused():
         compare_runs(BASE[:5], TRIAL[5:])
 
 
-def write(path, table):
-    with open(path, 'w', newline='', encoding='utf-8') as stream:
-        writer = csv.DictWriter(stream, fieldnames=list(table[0]))
-        writer.writeheader()
-        writer.writerows(table)
-    return str(path)
-
-
 def test_the_script_prints_the_table_and_refuses_what_it_cannot_pair(tmp_path, capsys):
-    a, b = write(tmp_path / 'a.csv', BASE), write(tmp_path / 'b.csv', TRIAL)
+    a, b = str(tmp_path / 'a.csv'), str(tmp_path / 'b.csv')
+    write_csv(BASE, a, list(BASE[0]))
+    write_csv(TRIAL, b, list(TRIAL[0]))
     assert main([a, b, '--metric', 'detected_share']) == 0
     out = capsys.readouterr().out
     assert out.startswith('| setting | metric | A | B | B - A [95 % CI] | Wilcoxon p | seeds |')

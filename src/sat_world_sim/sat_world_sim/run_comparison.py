@@ -17,6 +17,7 @@ import numpy as np
 
 from sat_world_sim.evaluate import read_rows
 from sat_world_sim.paired_statistics import paired_difference, PairedDifference
+from sat_world_sim.paired_statistics import paired_values
 
 METRICS = ('detected_share', 'entered_share', 'tracked_share', 'mean_ospa',
            'false_track_steps', 'searched_pct_100')
@@ -66,16 +67,14 @@ def compare_runs(rows_a: Sequence[dict], rows_b: Sequence[dict],
     for setting in settings:
         a = _cell_rows(rows_a, setting, label_a, 'A')
         b = _cell_rows(rows_b, setting, label_b, 'B')
-        seeds = sorted(set(a) & set(b))
-        if not seeds:
+        if not set(a) & set(b):
             raise ValueError(f'the two runs share no seed at {setting}')
         for metric in metrics:
-            x = np.array([_value(a[s], metric) for s in seeds])
-            y = np.array([_value(b[s], metric) for s in seeds])
-            both = np.isfinite(x) & np.isfinite(y)   # e.g. no time to detection: no target
-            means = [float(np.mean(v[both])) if both.any() else np.nan for v in (x, y)]
-            found.append(MetricComparison(setting, metric, *means,
-                                          paired_difference(y[both], x[both])))
+            # Seeds where either value is undefined (no time to detection: no target) drop out.
+            y, x = paired_values({s: _value(r, metric) for s, r in b.items()},
+                                 {s: _value(r, metric) for s, r in a.items()})
+            means = [float(np.mean(v)) if v.size else np.nan for v in (x, y)]
+            found.append(MetricComparison(setting, metric, *means, paired_difference(y, x)))
     return found
 
 
