@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.track_coasting import (
@@ -35,6 +36,12 @@ def _follow(coasting, steps, pose_of=lambda k: _walk(k), noise=0.0, seed=0):
         seen = _walk(k) + noise * rng.standard_normal(2)
         result = coasting.update(k, pose_of(k), [_estimate(seen, VELOCITY)], NONE, NONE)
     return result
+
+
+def _follow_step(coasting, k, noise, rng):
+    """Feed the estimate of step k (noise m off the walk); return the fresh count."""
+    seen = _walk(k) + noise * rng.standard_normal(2)
+    return coasting.update(k, _walk(k), [_estimate(seen, VELOCITY)], NONE, NONE).fresh
 
 
 def test_the_fit_is_least_squares_and_its_spread_shrinks_with_the_estimates():
@@ -84,6 +91,36 @@ def test_a_track_needs_a_few_estimates_and_fresh_counts_the_short_ones():
     assert _follow(TrackCoasting(PARAMS), PARAMS.cooperation.follow_steps).fresh == 0
 
 
+def test_the_velocity_error_is_the_fits_standard_error():
+    steps = list(range(1, 13))
+    rng = np.random.default_rng(4)
+    noisy = np.array([_walk(k) + rng.normal(0.0, 1.0, 2) for k in steps])
+    # Per axis, scipy's standard error of the slope; the track pools both axes' residuals.
+    per_axis = [stats.linregress(steps, noisy[:, i]).stderr for i in range(2)]
+    track = Track(steps, list(noisy), np.zeros(2))
+    assert track.velocity_error() == pytest.approx(np.sqrt(np.mean(np.square(per_axis))))
+    assert Track(steps, [_walk(k) for k in steps], np.zeros(2)).velocity_error() < 1e-12
+    assert Track([1, 2], [_walk(1), _walk(2)], np.zeros(2)).velocity_error() == np.inf
+
+
+def test_a_noisy_track_is_followed_until_its_velocity_is_known():
+    limit = PARAMS.cooperation.follow_velocity_error
+    enough = PARAMS.cooperation.follow_steps
+    coasting, rng, last = TrackCoasting(PARAMS), np.random.default_rng(7), 50
+    assert PARAMS.phd.coast_history >= last      # the track keeps every estimate fed here
+    fresh = [_follow_step(coasting, k, 1.0, rng) for k in range(1, last + 1)]
+    errors = [Track(list(range(1, k + 1)), coasting.tracks[0].positions[:k], np.zeros(2))
+              .velocity_error() for k in range(1, last + 1)]
+    released = [k for k in range(1, last + 1) if not fresh[k - 1]]
+    # Estimates erring 1 m: the count alone would release at follow_steps, the error holds on.
+    assert errors[enough - 1] > limit and released
+    assert released[0] == min(k for k in range(enough, last + 1) if errors[k - 1] <= limit)
+    # Exact estimates release at the count; a limit of 0 is the count alone.
+    assert not _follow(TrackCoasting(PARAMS), enough).fresh
+    counted = TrackCoasting(PARAMS.with_overrides({'cooperation.follow_velocity_error': 0.0}))
+    assert not _follow(counted, enough, noise=1.0).fresh
+
+
 def test_looking_there_and_not_seeing_it_or_a_neighbour_seeing_it_ends_the_report():
     coasting = TrackCoasting(PARAMS)
     _follow(coasting, 20)
@@ -111,13 +148,14 @@ def test_looking_there_and_not_seeing_it_or_a_neighbour_seeing_it_ends_the_repor
 
 def test_an_estimate_continues_the_nearest_track_one_to_one():
     coasting = TrackCoasting(PARAMS)
-    _follow(coasting, 10)
+    short = PARAMS.cooperation.follow_steps - 3      # both tracks stay short: both fresh
+    _follow(coasting, short)
     other = np.array([70.0, 20.0])
-    step = coasting.update(11, _walk(11), [_estimate(other), _estimate(_walk(11) + 0.5)],
-                           NONE, NONE)
+    step = coasting.update(short + 1, _walk(short + 1),
+                           [_estimate(other), _estimate(_walk(short + 1) + 0.5)], NONE, NONE)
     assert len(coasting.tracks) == 2 and step.fresh == 2
     lengths = sorted(track.length for track in coasting.tracks)
-    assert lengths == [1, 11]
+    assert lengths == [1, short + 1]
 
 
 def test_the_papers_agent_coasts_nothing():

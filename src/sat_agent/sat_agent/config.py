@@ -294,11 +294,15 @@ class CooperationParams:
     # Dev seeds 2001-2030 (random default): 0.1 / 0.3 / 0.5 gave detected 0.61 / 0.66 / 0.64,
     # entered 0.69 / 0.76 / 0.78, tracked 0.31 / 0.32 / 0.27, OSPA 6.76 / 6.70 / 7.06 m. The
     # persistent profile leaves the addition off (config/persistent.yaml says why).
-    # ~20 estimates pin a walk's velocity (phd.coast_history). Dev seeds 2001-2100 at random,
-    # paired with 20: 10 detected +3.5 points and tracked -2.3 (config/persistent.yaml).
+    # A fixed count trades: dev seeds at random, paired with 20 alone, 10 alone detected +3.5
+    # points and tracked -2.3 (2001-2100) and -3.1 (2201-2400). 8 and 4 cm/s (what 20
+    # estimates erring 1 m give) detected as much more without that loss (README, issue 15).
     follow_steps: int = param(
-        20, 'additions.track_coasting: a tracking agent returns to search once every target '
-        'in its square has a track of this many estimates', low=2, high=MANY)
+        8, 'additions.track_coasting: a tracking agent returns to search once every target '
+        'in its square has a track of at least this many estimates', low=2, high=MANY)
+    follow_velocity_error: float = param(
+        0.04, "additions.track_coasting: and the standard error of that track's fitted "
+        'velocity is at most this (m/s; 0: the count alone)', low=0, high=100)
     track_search_tolerance: float = param(
         0.3, 'additions.search_while_tracking: epsilon, the share of the best Renyi divergence '
         '(Eqn. track_control) a tracking agent may give up to cover search worth', low=0,
@@ -375,7 +379,8 @@ class AdditionsParams:
         False, 'a target an agent estimated and no longer sees is still reported, where the '
         "constant-velocity fit of its recent estimates puts it, until the agent's square or a "
         'neighbour shows otherwise or p_S^t falls below phd.coast_survival; a tracking agent '
-        'returns to search once its targets have cooperation.follow_steps estimates '
+        'returns to search once its targets have cooperation.follow_steps estimates and a '
+        'velocity known to cooperation.follow_velocity_error '
         '(beyond_paper/track_coasting.py)')
 
 
