@@ -301,6 +301,23 @@ def test_same_seed_same_outputs():
     assert run(11) != run(12)
 
 
+def test_filter_stream_redraws_the_particles_of_the_same_seed_only():
+    """phd.filter_stream gives another filter stream for a seed; the default is stream 0."""
+    params = small_params()
+    pose = np.array([50.0, 50.0])
+
+    def particles(values, seed=11):
+        return Agent(1, values, pose, seed=seed).filter.targets.states
+
+    assert params.phd.filter_stream == 0
+    np.testing.assert_array_equal(particles(params), particles(params))
+    other = params.with_overrides({'phd.filter_stream': 1})
+    assert particles(other).shape == particles(params).shape
+    assert not np.array_equal(particles(other), particles(params))
+    # Not merely the next seed's stream.
+    assert not np.array_equal(particles(other), particles(params, seed=12))
+
+
 @pytest.mark.parametrize('pose', [(0.0, 0.0), (100.0, 37.0)])
 def test_actions_are_admissible_at_the_border(pose):
     params = small_params()

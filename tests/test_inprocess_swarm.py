@@ -177,6 +177,22 @@ def test_same_seed_same_metrics_and_cli_writes_the_run_directory(tmp_path, capsy
     assert (again / 'metrics.json').read_bytes() == (out / 'metrics.json').read_bytes()
 
 
+def test_an_a_a_run_meets_the_same_truth_with_other_filter_draws(params):
+    """phd.filter_stream (an A/A trial): the same truth and first poses, other particles."""
+    scenario = load_scenario(CONFIG / 'scenarios' / 'single_target.yaml').with_seed(3)
+    runs = [run_swarm(scenario, params.with_overrides({'phd.filter_stream': stream}), steps=30)
+            for stream in (0, 1)]
+    for a, b in zip(*(run.records for run in runs)):
+        np.testing.assert_array_equal(a.truth_ids, b.truth_ids)
+        np.testing.assert_array_equal(a.truth_positions, b.truth_positions)
+    assert all(np.array_equal(runs[0].records[0].agent_poses[a], pose)
+               for a, pose in runs[1].records[0].agent_poses.items())
+    assert any(not np.array_equal(a.agent_poses[1], b.agent_poses[1])
+               or a.estimates[1].shape != b.estimates[1].shape
+               or not np.allclose(a.estimates[1], b.estimates[1])
+               for a, b in zip(*(run.records for run in runs)))
+
+
 def test_cli_refuses_a_bad_scenario_with_a_clear_message(tmp_path, capsys):
     bad = tmp_path / 'bad.yaml'
     bad.write_text('seed: 1\nsteps: 10\nagents: [{id: 1, start: [500, 1]}]\n')

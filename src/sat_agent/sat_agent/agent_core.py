@@ -84,9 +84,10 @@ REPORT_KINDS = ('search_density', 'estimate', 'mode')
 _ID_STEP_BYTES = 4 + 4
 _POSE_BYTES = 2 * 8
 _TARGET_BYTES = 8 * (2 + 2 + 16 + 1)
-# Spawn-key prefix of the agents' filter generators. A world seeded with the same scenario seed
-# spawns its truth and sensor streams with keys (0,), (1,), ... (SeedSequence.spawn); a filter
-# keyed (agent_id,) would replay its own sensor's draws, so its noise would not be independent.
+# Spawn-key prefix of the agents' filter generators, plus phd.filter_stream. A world seeded with
+# the same scenario seed spawns its truth and sensor streams with keys (0,), (1,), ...
+# (SeedSequence.spawn); a filter keyed (agent_id,) would replay its own sensor's draws, so its
+# noise would not be independent.
 FILTER_STREAM = 2 ** 16
 # Replans every searching member of a group sees at the same step, so they plan jointly.
 JOINT_REASONS = (ReplanReason.NEW_NEIGHBOUR, ReplanReason.RELEASED, ReplanReason.PERIODIC)
@@ -185,15 +186,16 @@ class Agent:
     """One agent's SAT-PHD filter, mode machine, planners and overlap monitor (module docstring).
 
     Same constructor arguments and same step inputs give the same outputs: the only randomness
-    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM, agent_id), and a
-    random baseline's, seeded with (seed, agent_id, its stream) (baselines/interface.py).
+    is the filter's, drawn from a generator seeded with (seed, FILTER_STREAM +
+    phd.filter_stream, agent_id), and a random baseline's, seeded with (seed, agent_id, its
+    stream) (baselines/interface.py).
     """
 
     def __init__(self, agent_id: int, params: SatParams, initial_pose, seed: int = 0):
         self.agent_id = int(agent_id)
         self.params = params
         self._rng = np.random.default_rng(np.random.SeedSequence(
-            int(seed), spawn_key=(FILTER_STREAM, self.agent_id)))
+            int(seed), spawn_key=(FILTER_STREAM + params.phd.filter_stream, self.agent_id)))
         self.filter = SatPhdFilter(params, self._rng)
         additions = params.additions
         self.extractor = (PeakExtractor if additions.peak_extraction else NHatExtractor)(params)

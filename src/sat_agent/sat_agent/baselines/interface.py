@@ -22,8 +22,8 @@ import numpy as np
 from sat_agent.phd_filter import ParticlePHD
 
 # Last spawn_key element of a baseline's generator, keyed (agent_id, this): apart from the
-# world's streams ((0,), (1,), ...) and the filter's ((agent_core.FILTER_STREAM, agent_id)), and
-# from each other.
+# world's streams ((0,), (1,), ...) and the filter's ((agent_core.FILTER_STREAM +
+# phd.filter_stream, agent_id)), and from each other.
 RANDOM_WALK_STREAM = 1
 THOMPSON_STREAM = 2
 
