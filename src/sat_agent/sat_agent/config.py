@@ -167,7 +167,8 @@ class PhdParams:
     # difference is not larger than such an A/A trial's is noise.
     filter_stream: int = param(
         0, "the agents' filter random streams: runs that differ only here share the scenario "
-        "and the world's draws but not the filter's particles (an A/A trial)", low=0, high=MANY)
+        "and the world's random streams but not the filter's particles (an A/A trial)", low=0,
+        high=MANY)
     min_particles: int = param(2000, 'fewest particles after resampling', low=1, high=1e7)
     max_particles: int = param(20000, 'most particles after resampling', low='min_particles',
                                high=1e7)
