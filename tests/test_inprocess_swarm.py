@@ -182,15 +182,17 @@ def test_an_a_a_run_meets_the_same_truth_with_other_filter_draws(params):
     scenario = load_scenario(CONFIG / 'scenarios' / 'single_target.yaml').with_seed(3)
     runs = [run_swarm(scenario, params.with_overrides({'phd.filter_stream': stream}), steps=30)
             for stream in (0, 1)]
-    for a, b in zip(*(run.records for run in runs)):
+    steps = list(zip(*(run.records for run in runs)))
+    for a, b in steps:
         np.testing.assert_array_equal(a.truth_ids, b.truth_ids)
         np.testing.assert_array_equal(a.truth_positions, b.truth_positions)
-    assert all(np.array_equal(runs[0].records[0].agent_poses[a], pose)
-               for a, pose in runs[1].records[0].agent_poses.items())
+    first_a, first_b = steps[0]
+    assert all(np.array_equal(first_a.agent_poses[agent], pose)
+               for agent, pose in first_b.agent_poses.items())
     assert any(not np.array_equal(a.agent_poses[1], b.agent_poses[1])
                or a.estimates[1].shape != b.estimates[1].shape
                or not np.allclose(a.estimates[1], b.estimates[1])
-               for a, b in zip(*(run.records for run in runs)))
+               for a, b in steps)
 
 
 def test_cli_refuses_a_bad_scenario_with_a_clear_message(tmp_path, capsys):

@@ -162,9 +162,8 @@ class PhdParams:
     particles_per_target: int = param(2000, 'resampling budget per unit of PHD mass',
                                       low=1, high=1e6)
     # Any change to a run moves the agents' paths, so two runs of one seed meet the same truth
-    # but little else: on the dev seeds 2001-2100, the persistent profile with stream 1
-    # against 0 detected -4.8 points [-9.5, +0.1] (README, Evaluation). A trial whose
-    # difference is not larger than such an A/A trial's is noise.
+    # but little else; a trial whose difference is not larger than such an A/A trial's is
+    # noise (README, Evaluation, "How large seed noise is", has the measured figures).
     filter_stream: int = param(
         0, "the agents' filter random streams: runs that differ only here share the scenario "
         "and the world's random streams but not the filter's particles (an A/A trial)", low=0,
