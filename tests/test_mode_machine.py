@@ -74,3 +74,22 @@ def test_refuses_bad_counts_and_cooldowns():
         ModeMachine(PARAMS).update(1.5, False)
     with pytest.raises(ParameterError, match='cooperation.rejoin_cooldown'):
         PARAMS.with_overrides({'cooperation.rejoin_cooldown': -2})
+
+
+def test_a_track_on_probation_ends_on_its_first_step_without_targets():
+    probation = PARAMS.with_overrides({'cooperation.track_probation': 3})
+    # Estimated on 2 steps (< 3), then gone: SEARCH at once, not after the timeout.
+    machine = tracking_machine(probation)
+    assert machine.update(1, False) == Mode.TRACK
+    assert machine.update(0, False) == Mode.SEARCH and machine.switched
+    # Estimated on 3 steps: past probation, the timeout rides out a miss as before.
+    machine = tracking_machine(probation)
+    for _ in range(2):
+        machine.update(1, False)
+    for _ in range(PARAMS.cooperation.track_timeout - 1):
+        assert machine.update(0, False) == Mode.TRACK
+    assert machine.update(0, False) == Mode.SEARCH
+    # A new episode starts its probation again; 0 (the default) never cuts the timeout.
+    assert machine.update(1, False) == Mode.TRACK
+    assert machine.update(0, False) == Mode.SEARCH
+    assert tracking_machine().update(0, False) == Mode.TRACK

@@ -100,6 +100,12 @@ class SensorParams:
     sigma_bearing_0: float = param(math.pi / 180.0, 'phi_0 (rad): sigma_b = phi_0 + beta_phi d',
                                    low=0, high=math.pi, low_open=True)
     sigma_bearing_slope: float = param(1e-5, 'beta_phi (rad/m)', low=0)
+    # The filter's model only: the simulated sensor draws with the sigmas above
+    # (sensor_model.log_likelihood says why a kernel may pay). Off in every profile until the
+    # reported rows are made with it (README, issue 15).
+    likelihood_bandwidth: float = param(
+        0.0, "h (m): the filter's g(z | x) is that of a Gaussian kernel of this spread around "
+        "each particle (0: the sensor's own g, the paper's)", low=0, high=10)
     clutter_rate: float = param(10.0, 'lambda: Poisson mean of false alarms per scan',
                                 low=0, high=1e4)
     # The paper's measurement space is that of h over the area: 141.42 m, the diagonal of its
@@ -197,6 +203,11 @@ class PhdParams:
     confirm_gate: float = param(
         3.0, 'additions.confirmation: the confirming peaks lie within this of each other (m)',
         low=0, high=100)
+    # beyond_paper/confirmation.py says why it may pay. Off in every profile until the reported
+    # rows are made with it (README, issue 15).
+    confirm_mass: float = param(
+        0.0, 'additions.confirmation: a peak with at least this PHD mass is a target on its '
+        'first scan with round(mass) >= 1 (0: never, the streak alone)', low=0, high=100)
     tentative_threshold: float = param(
         0.2, 'additions.investigation: unconfirmed peaks in the square with this mass are '
         'tentative', low=0, high=0.5)
@@ -286,6 +297,12 @@ class CooperationParams:
     track_timeout: int = param(
         5, 'TRACK falls back to SEARCH after this many steps with no estimated target',
         low=1, high=MANY)
+    # A peak that vanishes right after its confirmation is likelier clutter than a miss
+    # (mode_machine). Off in every profile until the reported rows are made with it.
+    track_probation: int = param(
+        0, 'a TRACK episode with fewer than this many steps with an estimated target falls back '
+        'to SEARCH on its first step without one (0: always after cooperation.track_timeout)',
+        low=0, high=MANY)
     # Up to 4 m/step of flight, far beyond the a/2 + extraction margin = 10 m it takes to get
     # the abandoned targets out of view.
     rejoin_cooldown: int = param(

@@ -5,7 +5,11 @@ to searching when it has estimated no target for ``cooperation.track_timeout`` c
 (a short miss, e.g. one missed detection at p_D = 0.99, does not end the track), or at once when
 the tracking-overlap test makes it the leaver.
 
-The track timeout is an interpretation: the paper does not say when TRACK ends.
+The track timeout is an interpretation: the paper does not say when TRACK ends. Beyond it,
+``cooperation.track_probation`` = n > 0 ends a TRACK episode with fewer than n steps with an
+estimated target on its first step without one: the timeout rides out a missed detection of a
+held target (1 % at p_D = 0.99), while a peak that vanishes right after its confirmation is far
+likelier clutter (README, issue 15, session 20; 0, the default, keeps the timeout alone).
 
 The paper's leaver searches from the next step and, like every searching agent, tracks again on
 its next estimate (``NoCooldown``). The addition ``additions.rejoin_cooldown`` makes it ignore
@@ -44,11 +48,14 @@ class ModeMachine:
 
     def __init__(self, params: SatParams):
         self._timeout = int(params.cooperation.track_timeout)
+        self._probation = int(params.cooperation.track_probation)
         self._cooldown = (RejoinCooldown(params.cooperation.rejoin_cooldown)
                           if params.additions.rejoin_cooldown else NoCooldown())
         self.mode = Mode.SEARCH
         self.switched = False
         self._steps_without_targets = 0
+        # Steps of this TRACK episode with an estimated target.
+        self._steps_with_targets = 0
 
     @property
     def cooldown_left(self) -> int:
@@ -69,6 +76,7 @@ class ModeMachine:
         elif not self._cooldown.hold() and n_targets > 0:
             self.mode = Mode.TRACK
             self._steps_without_targets = 0
+            self._steps_with_targets = 1
         self.switched = self.mode != previous
         return self.mode
 
@@ -78,5 +86,7 @@ class ModeMachine:
             self._cooldown.start()
             return
         self._steps_without_targets = 0 if n_targets > 0 else self._steps_without_targets + 1
-        if self._steps_without_targets >= self._timeout:
+        self._steps_with_targets += n_targets > 0
+        on_probation = n_targets == 0 and self._steps_with_targets < self._probation
+        if self._steps_without_targets >= self._timeout or on_probation:
             self.mode = Mode.SEARCH

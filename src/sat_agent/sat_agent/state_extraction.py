@@ -112,7 +112,7 @@ class FirstEstimate:
         """Return 1: every peak is on its first scan."""
         return 1
 
-    def confirmed(self, streak: int) -> bool:
+    def confirmed(self, streak: int, mass: float) -> bool:
         """Return True: every peak is a target."""
         return True
 
@@ -204,7 +204,7 @@ class NHatExtractor(Extractor):
             if ranked < n_hat:
                 ranked += 1
                 streak = self.confirmation.streak(peak, self.memory)
-                confirmed = self.confirmation.confirmed(streak)
+                confirmed = self.confirmation.confirmed(streak, float(weights.sum()))
             elif weights.sum() >= phd_params.tentative_threshold:
                 streak, confirmed = 0, False
             else:

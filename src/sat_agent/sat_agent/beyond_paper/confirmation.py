@@ -4,10 +4,15 @@ Paper: X-hat_k is the n_hat highest peaks of the PHD, and an agent switches to T
 targets are found (Sections "Search-and-Track Density", "Multi-agent Tracking"): the first
 estimate is a target.
 Addition: a peak with round(mass) >= 1 becomes a target on its ``phd.confirm_scans``-th scan in
-a row with round(mass) >= 1 at peaks within ``phd.confirm_gate`` of each other (its streak);
+a row with round(mass) >= 1 at peaks within ``phd.confirm_gate`` of each other (its streak),
+or on its first such scan when its mass reaches ``phd.confirm_mass`` (0: the streak alone);
 before that it is tentative.
 Why: a clutter-born cloud can reach round(mass) = 1 on one scan but seldom stays that heavy
-twice; without confirmation every such cloud would start a (false) track.
+twice; without confirmation every such cloud would start a (false) track. The mass of a
+measurement-born cloud after its second scan is the PHD's probability that the two scans saw
+one target, tau / (kappa + tau) (phd_filter.update_weights), so a heavy cloud has already
+passed the test a streak stands for; a pass at 4 m/step holds a target for two or three scans
+(the first only seeds its birth), so a streak of two costs a target seen twice.
 Switch: ``additions.confirmation`` (off: state_extraction.FirstEstimate).
 """
 
@@ -22,6 +27,7 @@ class ScanConfirmation:
     def __init__(self, phd: PhdParams):
         self._scans = int(phd.confirm_scans)
         self._gate = float(phd.confirm_gate)
+        self._mass = float(phd.confirm_mass)
 
     def streak(self, peak: np.ndarray, memory) -> int:
         """Count the scans in a row with round(mass) >= 1 at this peak, this one included.
@@ -35,6 +41,7 @@ class ScanConfirmation:
         near = np.hypot(*(positions - peak).T) <= self._gate
         return 1 + int(np.max(np.asarray(memory.streaks)[near], initial=0))
 
-    def confirmed(self, streak: int) -> bool:
-        """Whether a peak with this streak is a target."""
-        return streak >= self._scans
+    def confirmed(self, streak: int, mass: float) -> bool:
+        """Whether a peak with this streak and PHD mass is a target."""
+        heavy = self._mass > 0.0 and streak >= 1 and mass >= self._mass
+        return streak >= self._scans or heavy

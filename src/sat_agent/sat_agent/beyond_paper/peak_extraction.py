@@ -76,7 +76,7 @@ class PeakExtractor(Extractor):
                 continue
             count = int(np.floor(peak_mass + 0.5))
             streak = self.confirmation.streak(peak, self.memory) if count >= 1 else 0
-            if count >= 1 and self.confirmation.confirmed(streak):
+            if count >= 1 and self.confirmation.confirmed(streak, peak_mass):
                 estimates.extend(_estimates(*claimed, peak, count))
             elif peak_mass >= phd_params.tentative_threshold:
                 tentative.append(summarise(claimed[0], claimed[2], peak))
