@@ -43,5 +43,4 @@ class ScanConfirmation:
 
     def confirmed(self, streak: int, mass: float) -> bool:
         """Whether a peak with this streak and PHD mass is a target."""
-        heavy = self._mass > 0.0 and streak >= 1 and mass >= self._mass
-        return streak >= self._scans or heavy
+        return streak >= self._scans or 0.0 < self._mass <= mass
