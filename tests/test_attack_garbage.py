@@ -14,7 +14,8 @@ from rclpy.serialization import serialize_message
 
 from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
 from sat_agent.ros.signed_io import VerifiedInput
-from sat_msgs.msg import GroundTruth, TargetTruth, WorldStep
+from sat_msgs.msg import AgentStatus, GroundTruth, TargetTruth, WorldStep
+from sat_world_sim.ros.observer import WINDOW
 
 KEY = bytes(range(32))
 TOPIC = '/world/truth'
@@ -87,3 +88,19 @@ def test_without_a_key_a_world_message_far_ahead_is_held_to_the_window():
     assert inputs.receive('/world/step', data(5), WorldStep, LIMIT, sender=0).step == 5
     assert inputs.receive('/world/step', data(2 ** 32 - 1), WorldStep, LIMIT, sender=0) is None
     assert guard.dropped == {'out_of_window': 1}
+
+
+def test_an_observer_takes_an_answer_that_outruns_the_world_messages_of_its_step():
+    # CI once lost agent 2's answers of step 22 in the bag: the recorder knew step 20 (DDS
+    # orders each writer alone). An observer takes them up to a writer's history ahead.
+    guard = Guard()
+    inputs = VerifiedInput(None, guard, KEY, [1, 2], WINDOW)
+    assert inputs.receive(TOPIC, genuine(20), GroundTruth, LIMIT, sender=WORLD_SENDER)
+
+    def status(step):
+        topic = '/agent_2/status'
+        data = serialize_message(AgentStatus(agent_id=2, step=step))
+        return inputs.receive(topic, Signer(KEY, 2).sign(topic, data, step), AgentStatus, LIMIT,
+                              sender=2)
+    assert status(22).step == 22 and status(20 + WINDOW.ahead).step == 20 + WINDOW.ahead
+    assert status(21 + WINDOW.ahead) is None and guard.dropped == {'out_of_window': 1}

@@ -28,6 +28,7 @@ from sat_agent.ros.input_guard import peak_memory_kb
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import (AgentStatus, GridInfo, GroundTruth, MeasurementSet, SearchDensity,
                           TargetTruth, WorldStep)
+from sat_world_sim.ros.observer import WINDOW
 
 pytestmark = pytest.mark.ros
 STEPS = 30
@@ -119,10 +120,10 @@ class Attacker:
                 topic, serialize_message(bomb), k, relayed=True))
             self.sent['grid_mismatch|replayed'] += 1
         if msg_type is AgentStatus and k == 10:
-            for ahead in range(FUTURE_STATUSES):
-                future = AgentStatus(agent_id=2, step=k + 10 + ahead)
-                self.hostile.send(topic, AgentStatus,
-                                  forge(future, topic, k + 10 + ahead, 2, self.key))
+            first = k + WINDOW.ahead + 1      # just beyond the observers' step window
+            for step in range(first, first + FUTURE_STATUSES):
+                future = AgentStatus(agent_id=2, step=step)
+                self.hostile.send(topic, AgentStatus, forge(future, topic, step, 2, self.key))
             self.sent['out_of_window'] += FUTURE_STATUSES
 
 

@@ -33,10 +33,12 @@ from sat_msgs.msg import AgentStatus, GroundTruth, RadioTraffic, SearchDensity, 
 
 from sat_world_sim.topics import agent_of
 
-# Observers may fall up to a writer's history (qos.DEPTH steps) behind the world; a peer's
-# message is never more than a step ahead of the world's, and the world's come one step at a
-# time on each topic.
-WINDOW = StepWindow(behind=DEPTH, ahead=1, world_ahead=1)
+# Observers may fall up to a writer's history (qos.DEPTH steps) behind the world, and the
+# world's messages may reach them as late behind a peer's: an agent answers scan k only after
+# world_sim sent it, but DDS orders each writer's samples alone, so at an observer world_sim's
+# writers can lag an agent's by steps (the recorder once knew step 20 when agent 2's estimate
+# of step 22 came, and refused it). Within a writer's history either way; further is garbage.
+WINDOW = StepWindow(behind=DEPTH, ahead=DEPTH, world_ahead=DEPTH)
 _WORLD_TOPICS = {'/world/step': 'step', '/world/truth': 'truth', '/world/radio': 'traffic'}
 
 
