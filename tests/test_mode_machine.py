@@ -77,7 +77,8 @@ def test_refuses_bad_counts_and_cooldowns():
 
 
 def test_a_track_on_probation_ends_on_its_first_step_without_targets():
-    probation = PARAMS.with_overrides({'cooperation.track_probation': 3})
+    probation = PARAMS.with_overrides({'additions.track_probation': True})
+    assert probation.cooperation.track_probation == 3
     # Estimated on 2 steps (< 3), then gone: SEARCH at once, not after the timeout.
     machine = tracking_machine(probation)
     assert machine.update(1, False) == Mode.TRACK
@@ -89,7 +90,7 @@ def test_a_track_on_probation_ends_on_its_first_step_without_targets():
     for _ in range(PARAMS.cooperation.track_timeout - 1):
         assert machine.update(0, False) == Mode.TRACK
     assert machine.update(0, False) == Mode.SEARCH
-    # A new episode starts its probation again; 0 (the default) never cuts the timeout.
+    # A new episode starts its probation again; with the switch off it never cuts the timeout.
     assert machine.update(1, False) == Mode.TRACK
     assert machine.update(0, False) == Mode.SEARCH
     assert tracking_machine().update(0, False) == Mode.TRACK

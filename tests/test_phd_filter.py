@@ -52,9 +52,9 @@ def test_gating_computes_likelihoods_only_inside(monkeypatch):
     seen = []
     original = sensor_model.log_likelihood
 
-    def spy(z, points, pose, sensor):
+    def spy(z, points, pose, sensor, bandwidth):
         seen.append(len(points))
-        return original(z, points, pose, sensor)
+        return original(z, points, pose, sensor, bandwidth)
 
     monkeypatch.setattr(sensor_model, 'log_likelihood', spy)
     rng = np.random.default_rng(2)

@@ -4,6 +4,7 @@ from hypothesis import given, strategies as st
 import numpy as np
 
 from sat_agent import sensor_model
+from sat_agent.beyond_paper.kernel_likelihood import filter_bandwidth
 from sat_agent.config import SatParams
 
 SIDE = 10.0
@@ -55,19 +56,20 @@ def test_h_is_range_and_bearing_from_the_pose(pts):
 def test_a_likelihood_bandwidth_is_the_likelihood_of_a_kernel_around_the_point():
     """The g of bandwidth h is g averaged over N(point, h^2 I) draws (to first order)."""
     sensor = SatParams().sensor
-    smoothed = SatParams().with_overrides({'sensor.likelihood_bandwidth': 0.3}).sensor
+    h = filter_bandwidth(SatParams().with_overrides({'additions.kernel_likelihood': True}))
+    assert h == sensor.likelihood_bandwidth == 0.3 and filter_bandwidth(SatParams()) == 0.0
     rng = np.random.default_rng(5)
     point = POSE + np.array([4.0, 3.0])                       # 5 m away
     offsets = np.array([[0.4, 0.03], [-0.8, -0.05], [0.0, 0.0]])   # [range, bearing]
     z = sensor_model.measure(point[None], POSE) + offsets
     draws = point + rng.normal(0.0, 0.3, (200_000, 2))
     averaged = sensor_model.likelihood(z, draws, POSE, sensor).mean(axis=0)
-    np.testing.assert_allclose(sensor_model.likelihood(z, point[None], POSE, smoothed)[0],
+    np.testing.assert_allclose(sensor_model.likelihood(z, point[None], POSE, sensor, h)[0],
                                averaged, rtol=0.03)
     # At 2 m the kernel is wider than the bearing: a measurement 20 cm across the line of
     # sight is still explained, where the sensor's own g gives it nothing.
     near = POSE + np.array([2.0, 0.0])
     across = sensor_model.measure((near + [0.0, 0.2])[None], POSE)
     own = sensor_model.likelihood(across, near[None], POSE, sensor)[0, 0]
-    kernel = sensor_model.likelihood(across, near[None], POSE, smoothed)[0, 0]
+    kernel = sensor_model.likelihood(across, near[None], POSE, sensor, h)[0, 0]
     assert own < 1e-6 < 0.1 < kernel

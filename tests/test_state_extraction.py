@@ -228,14 +228,15 @@ def test_confirmation_switch_takes_confirm_scans_or_the_first_estimate(extractor
 
 
 @pytest.mark.parametrize('extractor', [PeakExtractor, NHatExtractor])
-def test_a_peak_of_confirm_mass_is_a_target_on_its_first_heavy_scan(extractor):
+def test_a_heavy_peak_is_a_target_on_its_first_scan(extractor):
     rng = np.random.default_rng(24)
     heavy, light = _phd(_cloud(rng, (53, 48), 0.9)), _phd(_cloud(rng, (53, 48), 0.7))
     base = PARAMS if extractor is PeakExtractor else STRICT.with_overrides(
         {'additions.confirmation': True})
-    rule = base.with_overrides({'phd.confirm_mass': 0.8})
+    rule = base.with_overrides({'additions.heavy_peak_confirmation': True})
+    assert rule.phd.confirm_mass == 0.8
     assert len(extractor(rule).extract(heavy, POSE).targets) == 1
-    # A lighter peak still needs its streak, and with the default (0) a heavy one does too.
+    # A lighter peak still needs its streak, and with the switch off a heavy one does too.
     lighter = extractor(rule)
     assert [len(lighter.extract(light, POSE).targets) for _ in range(2)] == [0, 1]
     assert len(extractor(base).extract(heavy, POSE).targets) == 0

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from sat_agent import actions, sensor_model
+from sat_agent.beyond_paper.kernel_likelihood import filter_bandwidth
 from sat_agent.beyond_paper.track_standoff import standoff_mask
 from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD, update_weights
@@ -93,10 +94,15 @@ def test_no_particles_means_stay():
     assert action == 0 and np.all(scores[np.isfinite(scores)] == 0.0)
 
 
-def test_score_equals_divergence_of_a_full_pseudo_update():
+KERNEL = PARAMS.with_overrides({'additions.kernel_likelihood': True})
+
+
+@pytest.mark.parametrize('params', [PARAMS, KERNEL], ids=['own g', 'kernel_likelihood'])
+def test_score_equals_divergence_of_a_full_pseudo_update(params):
     """Scoring only the particles near the agent, then inside each square, changes no score.
 
-    Bit for bit: the scores decide the action, and the evaluation's figures are reproduced.
+    Bit for bit: the scores decide the action, and the evaluation's figures are reproduced. The
+    pseudo-update uses the filter's g (with kernel_likelihood, the kernel's).
     """
     rng = np.random.default_rng(3)
     states = np.zeros((3000, 4))
@@ -104,11 +110,14 @@ def test_score_equals_divergence_of_a_full_pseudo_update():
     states[:200, [0, 2]] = POSE + rng.normal(0, 2, (200, 2))
     predicted = ParticlePHD(states, rng.random(3000) * 1e-3)
     estimate = _estimate(POSE + 1.0)
-    _, scores = CONTROL.action(predicted, estimate, POSE)
+    _, scores = TrackingControl(params).action(predicted, estimate, POSE)
+    bandwidth = filter_bandwidth(params)
     for action, pose in enumerate(actions.candidate_poses(POSE, PARAMS.actions)):
         z = predicted_ideal_measurements(estimate, pose, SENSOR)
-        full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR)
+        full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR,
+                              bandwidth=bandwidth)
         assert scores[action] == renyi_divergence(predicted.weights, full, 0.5)
+    assert (bandwidth > 0) == np.any(scores != CONTROL.action(predicted, estimate, POSE)[1])
 
 
 def test_track_standoff_switch_keeps_the_target_at_the_stand_off_or_takes_the_pure_argmax():

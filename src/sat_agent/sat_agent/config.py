@@ -14,8 +14,9 @@ Two kinds of departure from the paper, kept apart:
   (group ``additions``) and one module of ``sat_agent/beyond_paper/``; ``config/paper.yaml``
   switches the detection chain's on, ``config/paper_strict.yaml`` all off, and
   ``config/persistent.yaml`` adds persistent search-and-track (regrowing density, persistent
-  planning, search while tracking, track release) to paper.yaml's. Their numeric tunables (e.g.
-  ``search.investigate_steps``) tune an addition but cannot switch it off on their own.
+  planning, track release, track coasting, kernel likelihood, heavy-peak confirmation, track
+  probation; search while tracking is built and left off) to paper.yaml's. Their numeric
+  tunables (e.g. ``search.investigate_steps``) tune an addition but cannot switch it off.
 - *Interpretations*: where the paper is silent or a literal reading cannot run, the simplest
   reading, in both profiles, no switch (each is stated where it is implemented, too):
 
@@ -100,12 +101,10 @@ class SensorParams:
     sigma_bearing_0: float = param(math.pi / 180.0, 'phi_0 (rad): sigma_b = phi_0 + beta_phi d',
                                    low=0, high=math.pi, low_open=True)
     sigma_bearing_slope: float = param(1e-5, 'beta_phi (rad/m)', low=0)
-    # The filter's model only: the simulated sensor draws with the sigmas above
-    # (sensor_model.log_likelihood says why a kernel may pay). Off in every profile until the
-    # reported rows are made with it (README, issue 15).
+    # The filter's model only: the simulated sensor draws with the sigmas above.
     likelihood_bandwidth: float = param(
-        0.0, "h (m): the filter's g(z | x) is that of a Gaussian kernel of this spread around "
-        "each particle (0: the sensor's own g, the paper's)", low=0, high=10)
+        0.3, "additions.kernel_likelihood: h (m), the filter's g(z | x) is that of a Gaussian "
+        'kernel of this spread around each particle', low=0, high=10, low_open=True)
     clutter_rate: float = param(10.0, 'lambda: Poisson mean of false alarms per scan',
                                 low=0, high=1e4)
     # The paper's measurement space is that of h over the area: 141.42 m, the diagonal of its
@@ -203,11 +202,9 @@ class PhdParams:
     confirm_gate: float = param(
         3.0, 'additions.confirmation: the confirming peaks lie within this of each other (m)',
         low=0, high=100)
-    # beyond_paper/confirmation.py says why it may pay. Off in every profile until the reported
-    # rows are made with it (README, issue 15).
     confirm_mass: float = param(
-        0.0, 'additions.confirmation: a peak with at least this PHD mass is a target on its '
-        'first scan with round(mass) >= 1 (0: never, the streak alone)', low=0, high=100)
+        0.8, 'additions.heavy_peak_confirmation: a peak with at least this PHD mass is a target '
+        'on its first scan with round(mass) >= 1', low=0, high=100, low_open=True)
     tentative_threshold: float = param(
         0.2, 'additions.investigation: unconfirmed peaks in the square with this mass are '
         'tentative', low=0, high=0.5)
@@ -297,12 +294,9 @@ class CooperationParams:
     track_timeout: int = param(
         5, 'TRACK falls back to SEARCH after this many steps with no estimated target',
         low=1, high=MANY)
-    # A peak that vanishes right after its confirmation is likelier clutter than a miss
-    # (mode_machine). Off in every profile until the reported rows are made with it.
     track_probation: int = param(
-        0, 'a TRACK episode with fewer than this many steps with an estimated target falls back '
-        'to SEARCH on its first step without one (0: always after cooperation.track_timeout)',
-        low=0, high=MANY)
+        3, 'additions.track_probation: a TRACK episode with fewer than this many steps with an '
+        'estimated target falls back to SEARCH on its first step without one', low=2, high=MANY)
     # Up to 4 m/step of flight, far beyond the a/2 + extraction margin = 10 m it takes to get
     # the abandoned targets out of view.
     rejoin_cooldown: int = param(
@@ -343,7 +337,7 @@ class AdditionsParams:
     """Switches of the additions to the paper (module docstring; one module each in beyond_paper/).
 
     True is config/paper.yaml (our detection chain), False is the paper as written
-    (config/paper_strict.yaml); the persistent search-and-track additions (the last five) are
+    (config/paper_strict.yaml); the persistent search-and-track additions (the last eight) are
     False in both, and config/persistent.yaml switches on all of them but search_while_tracking.
     Each switch is the only way to turn its addition off.
     """
@@ -407,6 +401,18 @@ class AdditionsParams:
         'returns to search once its targets have cooperation.follow_steps estimates and a '
         'velocity known to cooperation.follow_velocity_error '
         '(beyond_paper/track_coasting.py)')
+    kernel_likelihood: bool = param(
+        False, "the filter's g(z | x) is the likelihood of a Gaussian kernel of spread "
+        "sensor.likelihood_bandwidth around each particle instead of the sensor's own "
+        '(beyond_paper/kernel_likelihood.py)')
+    heavy_peak_confirmation: bool = param(
+        False, 'with additions.confirmation, a peak of PHD mass phd.confirm_mass is a target on '
+        'its first scan instead of after phd.confirm_scans (beyond_paper/'
+        'heavy_peak_confirmation.py)')
+    track_probation: bool = param(
+        False, 'a TRACK episode with fewer than cooperation.track_probation steps with an '
+        'estimated target ends on its first step without one instead of after '
+        'cooperation.track_timeout (beyond_paper/track_probation.py)')
 
 
 @dataclass(frozen=True)

@@ -5,11 +5,9 @@ to searching when it has estimated no target for ``cooperation.track_timeout`` c
 (a short miss, e.g. one missed detection at p_D = 0.99, does not end the track), or at once when
 the tracking-overlap test makes it the leaver.
 
-The track timeout is an interpretation: the paper does not say when TRACK ends. Beyond it,
-``cooperation.track_probation`` = n > 0 ends a TRACK episode with fewer than n steps with an
-estimated target on its first step without one: the timeout rides out a missed detection of a
-held target (1 % at p_D = 0.99), while a peak that vanishes right after its confirmation is far
-likelier clutter (README, issue 15, session 20; 0, the default, keeps the timeout alone).
+The track timeout is an interpretation: the paper does not say when TRACK ends. The addition
+``additions.track_probation`` also ends a new TRACK episode on its first step without a target
+(beyond_paper/track_probation.py; ``NoProbation``: the timeout alone).
 
 The paper's leaver searches from the next step and, like every searching agent, tracks again on
 its next estimate (``NoCooldown``). The addition ``additions.rejoin_cooldown`` makes it ignore
@@ -20,6 +18,7 @@ estimated targets for ``cooperation.rejoin_cooldown`` steps first
 import enum
 
 from sat_agent.beyond_paper.rejoin_cooldown import RejoinCooldown
+from sat_agent.beyond_paper.track_probation import TrackProbation
 from sat_agent.config import SatParams
 
 
@@ -43,19 +42,29 @@ class NoCooldown:
         return False
 
 
+class NoProbation:
+    """The timeout alone ends a TRACK episode."""
+
+    def start(self) -> None:
+        """Do nothing: there is nothing to count."""
+
+    def ends(self, n_targets: int) -> bool:
+        """Return False: no episode ends on probation."""
+        return False
+
+
 class ModeMachine:
     """The agent's mode and its transitions (module docstring); starts in SEARCH."""
 
     def __init__(self, params: SatParams):
         self._timeout = int(params.cooperation.track_timeout)
-        self._probation = int(params.cooperation.track_probation)
+        self._probation = (TrackProbation(params.cooperation.track_probation)
+                           if params.additions.track_probation else NoProbation())
         self._cooldown = (RejoinCooldown(params.cooperation.rejoin_cooldown)
                           if params.additions.rejoin_cooldown else NoCooldown())
         self.mode = Mode.SEARCH
         self.switched = False
         self._steps_without_targets = 0
-        # Steps of this TRACK episode with an estimated target.
-        self._steps_with_targets = 0
 
     @property
     def cooldown_left(self) -> int:
@@ -76,7 +85,7 @@ class ModeMachine:
         elif not self._cooldown.hold() and n_targets > 0:
             self.mode = Mode.TRACK
             self._steps_without_targets = 0
-            self._steps_with_targets = 1
+            self._probation.start()
         self.switched = self.mode != previous
         return self.mode
 
@@ -86,7 +95,6 @@ class ModeMachine:
             self._cooldown.start()
             return
         self._steps_without_targets = 0 if n_targets > 0 else self._steps_without_targets + 1
-        self._steps_with_targets += n_targets > 0
-        on_probation = n_targets == 0 and self._steps_with_targets < self._probation
+        on_probation = self._probation.ends(n_targets)
         if self._steps_without_targets >= self._timeout or on_probation:
             self.mode = Mode.SEARCH

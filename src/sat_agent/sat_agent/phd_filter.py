@@ -45,6 +45,7 @@ from typing import Optional
 import numpy as np
 
 from sat_agent import motion_model, sensor_model
+from sat_agent.beyond_paper.kernel_likelihood import filter_bandwidth
 from sat_agent.beyond_paper.newborn_gate import untested_newborns
 from sat_agent.config import PhdParams, SatParams, SensorParams
 from sat_agent.search_density import Lattice, SearchDensity
@@ -76,7 +77,8 @@ class ParticlePHD:
 
 
 def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
-                   sensor: SensorParams, explained: Optional[np.ndarray] = None) -> np.ndarray:
+                   sensor: SensorParams, explained: Optional[np.ndarray] = None,
+                   bandwidth: float = 0.0) -> np.ndarray:
     """Return the corrected weights of Eqn. satphd_correct (true-target part).
 
     w_i <- [1 - p_D(x_i) + sum_z p_D(x_i) g(z | x_i) / (kappa(z) + tau(z))] w_i,
@@ -87,17 +89,19 @@ def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.nda
 
     explained: optional (M,) output array, filled with tau(z) / (kappa(z) + tau(z)), the share
     of each measurement the predicted targets explain (0 when no particle is in the square).
+    bandwidth: g's kernel spread (sensor_model.log_likelihood; 0: the sensor's own g).
     """
     new_weights = np.array(weights, dtype=float, copy=True)
     points = motion_model.positions(states)
     inside = np.flatnonzero(sensor_model.in_sensing_square(points, pose, sensor.square_side))
     new_weights[inside] *= detection_factors(points[inside], new_weights[inside], measurements,
-                                             pose, sensor, explained)
+                                             pose, sensor, explained, bandwidth)
     return new_weights
 
 
 def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
-                      sensor: SensorParams, explained: Optional[np.ndarray] = None) -> np.ndarray:
+                      sensor: SensorParams, explained: Optional[np.ndarray] = None,
+                      bandwidth: float = 0.0) -> np.ndarray:
     """Return the factors 1 - p_D + sum_z p_D g / (kappa + tau) of particles inside the square.
 
     points and weights: the (N, 2) positions and weights of the particles inside S_a(pose),
@@ -105,8 +109,8 @@ def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.
     measurement's column is scaled by its largest log-likelihood before exponentiating, so g
     values far below float range do not underflow to 0 / 0. When kappa = 0 and no particle can
     have produced z (tau(z) = 0) the term is 0 / 0; it is taken as 0: z then says nothing about
-    the existing particles (the measurement-driven birth accounts for it). explained: as in
-    ``update_weights``.
+    the existing particles (the measurement-driven birth accounts for it). explained and
+    bandwidth: as in ``update_weights``.
     """
     if explained is not None:
         explained[:] = 0.0
@@ -114,7 +118,7 @@ def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     if not len(z) or not len(points):
         return np.full(len(points), 1.0 - p_d)
-    log_g = sensor_model.log_likelihood(z, points, pose, sensor)
+    log_g = sensor_model.log_likelihood(z, points, pose, sensor, bandwidth)
     peak = log_g.max(axis=0)                    # (M,) scale per measurement
     np.subtract(log_g, peak, out=log_g)
     g_scaled = np.exp(log_g, out=log_g)         # g / exp(peak), in (0, 1]
@@ -245,6 +249,7 @@ class SatPhdFilter:
         self._newborn = slice(0, 0)
         self._dropped_newborns = (untested_newborns if params.additions.newborn_gate
                                   else keep_newborns)
+        self.bandwidth = filter_bandwidth(params)
 
     def predict(self, previous_pose) -> None:
         """Eqn. satphd_predict: survival p_S, NCV transition, births, search-density decay."""
@@ -266,7 +271,7 @@ class SatPhdFilter:
         params = self.params
         explained = np.zeros(len(np.asarray(measurements).reshape(-1, 2)))
         weights = update_weights(self.targets.states, self.targets.weights, measurements, pose,
-                                 params.sensor, explained)
+                                 params.sensor, explained, self.bandwidth)
         dropped = self._dropped_newborns(self.targets.states[self._newborn], pose,
                                          params.sensor)
         weights[self._newborn.start + np.flatnonzero(dropped)] = 0.0

@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 
+from sat_agent.beyond_paper.kernel_likelihood import kernel_sigmas
 from sat_agent.config import SensorParams
 
 LOG_2PI = math.log(2.0 * math.pi)
@@ -70,27 +71,20 @@ def measurement_sigmas(distance, sensor: SensorParams):
 
 
 def log_likelihood(measurements: np.ndarray, points: np.ndarray, pose,
-                   sensor: SensorParams) -> np.ndarray:
+                   sensor: SensorParams, bandwidth: float = 0.0) -> np.ndarray:
     """Return log g(z | x, s) for every point (rows) and measurement (columns): an (N, M) array.
 
     g is N(z; h(x, s), diag(sigma_r^2, sigma_b^2)) with the sigmas evaluated at the point's
-    distance; bearing residuals are wrapped. With ``sensor.likelihood_bandwidth`` = h > 0 each
-    point stands for a Gaussian kernel N(x; point, h^2 I) (a regularised particle filter, Musso,
-    Oudjane and Le Gland 2001), and g is that kernel's likelihood to first order: sigma_r^2 + h^2
-    and sigma_b^2 + (h / d)^2. Beyond the paper, whose g is the sensor's own: at 1-3 m the 1
-    degree bearing is 2-5 cm across the line of sight, narrower than the gaps of a cloud of a
-    few hundred particles spread over a metre, so without a kernel a target's own measurement
-    can find no particle to explain it. The arithmetic runs in place on (M, N) arrays (returned
-    transposed), so per-point factors broadcast along contiguous memory: the filter's update at
-    20k particles is bound by these passes over memory.
+    distance; bearing residuals are wrapped. bandwidth h > 0: g of a Gaussian kernel of spread h
+    around each point instead (beyond_paper/kernel_likelihood.py). The arithmetic runs in place
+    on (M, N) arrays (returned transposed), so per-point factors broadcast along contiguous
+    memory: the filter's update at 20k particles is bound by these passes over memory.
     """
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     distance, bearing = _range_bearing(points, pose)
     sigma_r, sigma_b = measurement_sigmas(distance, sensor)
-    bandwidth = sensor.likelihood_bandwidth
     if bandwidth > 0.0:
-        sigma_r = np.hypot(sigma_r, bandwidth)
-        sigma_b = np.hypot(sigma_b, bandwidth / np.maximum(distance, bandwidth))
+        sigma_r, sigma_b = kernel_sigmas(sigma_r, sigma_b, distance, bandwidth)
     log_g = np.subtract.outer(z[:, 0], distance)
     log_g *= 1.0 / sigma_r
     np.square(log_g, out=log_g)
@@ -107,9 +101,9 @@ def log_likelihood(measurements: np.ndarray, points: np.ndarray, pose,
 
 
 def likelihood(measurements: np.ndarray, points: np.ndarray, pose,
-               sensor: SensorParams) -> np.ndarray:
+               sensor: SensorParams, bandwidth: float = 0.0) -> np.ndarray:
     """Return g(z | x, s) as an (N, M) array (see log_likelihood)."""
-    return np.exp(log_likelihood(measurements, points, pose, sensor))
+    return np.exp(log_likelihood(measurements, points, pose, sensor, bandwidth))
 
 
 def clutter_intensity(sensor: SensorParams) -> float:

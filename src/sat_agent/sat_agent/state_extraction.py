@@ -163,7 +163,7 @@ class Extractor(abc.ABC):
         additions = params.additions
         self.side = (extraction_side(params) if additions.extraction_margin
                      else params.sensor.square_side)
-        self.confirmation = (ScanConfirmation(params.phd) if additions.confirmation
+        self.confirmation = (ScanConfirmation(params) if additions.confirmation
                              else FirstEstimate())
         self.memory = ExtractionMemory() if memory is None else memory
 

@@ -28,6 +28,7 @@ from typing import Optional
 import numpy as np
 
 from sat_agent import actions, motion_model, sensor_model
+from sat_agent.beyond_paper.kernel_likelihood import filter_bandwidth
 from sat_agent.beyond_paper.search_while_tracking import SearchWhileTracking
 from sat_agent.beyond_paper.track_standoff import standoff_mask
 from sat_agent.config import SatParams, SensorParams
@@ -61,17 +62,19 @@ def renyi_divergence(predicted_weights: np.ndarray, posterior_weights: np.ndarra
 
 
 def pseudo_update_score(points: np.ndarray, weights: np.ndarray, estimates: MultiTargetEstimate,
-                        pose, sensor: SensorParams, alpha: float) -> float:
+                        pose, sensor: SensorParams, alpha: float, bandwidth: float = 0.0) -> float:
     """Return xi(u) for the action putting the agent at pose (pseudo update, Renyi divergence).
 
     points, weights: the predicted particles. Particles outside S_a(pose) keep their weight
     and add exactly 0 (``renyi_divergence``), so only those inside are updated and summed: the
     same score, bit for bit, as the divergence over the whole set after ``update_weights``.
+    bandwidth: the filter's g (phd_filter.update_weights).
     """
     inside = np.flatnonzero(sensor_model.in_sensing_square(points, pose, sensor.square_side))
     w = weights[inside]
     z = predicted_ideal_measurements(estimates, pose, sensor)
-    return renyi_divergence(w, w * detection_factors(points[inside], w, z, pose, sensor), alpha)
+    factors = detection_factors(points[inside], w, z, pose, sensor, bandwidth=bandwidth)
+    return renyi_divergence(w, w * factors, alpha)
 
 
 def every_action(poses: np.ndarray, targets: np.ndarray, params: SatParams) -> np.ndarray:
@@ -94,6 +97,7 @@ class TrackingControl:
         self._preferred = standoff_mask if additions.track_standoff else every_action
         self._choose = (SearchWhileTracking(params.cooperation.track_search_tolerance)
                         if additions.search_while_tracking else best_score)
+        self._bandwidth = filter_bandwidth(params)   # the filter's g (kernel_likelihood)
 
     def action(self, predicted: ParticlePHD, estimates: MultiTargetEstimate, pose,
                search: Optional[SearchDensity] = None):
@@ -120,6 +124,6 @@ class TrackingControl:
         scores = np.full(len(poses), -np.inf)
         for action in np.flatnonzero(allowed):
             scores[action] = pseudo_update_score(points, weights, estimates, poses[action],
-                                                 sensor, alpha)
+                                                 sensor, alpha, self._bandwidth)
         candidates = preferred if preferred.any() else allowed
         return self._choose(scores, candidates, poses, search), scores

@@ -1,9 +1,11 @@
 """Additions to the paper: one module per addition, each switched by one bool of ``additions``.
 
-The default profile (config/paper.yaml) switches every addition on; config/paper_strict.yaml
-switches every one off and so runs the paper as written. Each module's docstring says what the
-paper says, what the addition does, why, and its switch; the paper's behaviour is the other
-implementation of the same small interface, chosen once where the component is built.
+The default profile (config/paper.yaml) switches every addition on but the eight of persistent
+search-and-track, which config/persistent.yaml switches on (search_while_tracking aside);
+config/paper_strict.yaml switches every one off and so runs the paper as written. Each module's
+docstring says what the paper says, what the addition does, why, and its switch; the paper's
+behaviour is the other implementation of the same small interface, chosen once where the
+component is built.
 
 Module (and switch ``additions.<module>``): the paper's implementation it replaces.
 
@@ -16,5 +18,13 @@ Module (and switch ``additions.<module>``): the paper's implementation it replac
 - revisit_fallback: V-bar = {p <= beta}, search_map.unvisited_nodes (search_planning);
 - rejoin_cooldown: TRACK on the next estimate, mode_machine.NoCooldown (mode_machine);
 - exhaustion_claims: plan over all of V-bar, search_planning.NoClaims (search_planning);
-- drop_searched_nodes: own visits only, search_planning.own_visits_only (search_planning).
+- drop_searched_nodes: own visits only, search_planning.own_visits_only (search_planning);
+- regrowing_density: the constant J, search_density.ConstantDecay (search_density);
+- persistent_planning: path-cheapest-arc over V-bar, search_planning.SearchPlanner (agent_core);
+- search_while_tracking: the best Renyi divergence, tracking_control.best_score (tracking_control);
+- track_release: every target tracked, agent_core.KeepAll (agent_core);
+- track_coasting: X-hat_k reported, tracking until lost, track_coasting.NoCoasting (agent_core);
+- kernel_likelihood: the sensor's own g, bandwidth 0 (phd_filter, tracking_control);
+- heavy_peak_confirmation: the streak alone (confirmation.ScanConfirmation);
+- track_probation: the timeout alone, mode_machine.NoProbation (mode_machine).
 """

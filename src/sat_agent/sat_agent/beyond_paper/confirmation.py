@@ -4,30 +4,26 @@ Paper: X-hat_k is the n_hat highest peaks of the PHD, and an agent switches to T
 targets are found (Sections "Search-and-Track Density", "Multi-agent Tracking"): the first
 estimate is a target.
 Addition: a peak with round(mass) >= 1 becomes a target on its ``phd.confirm_scans``-th scan in
-a row with round(mass) >= 1 at peaks within ``phd.confirm_gate`` of each other (its streak),
-or on its first such scan when its mass reaches ``phd.confirm_mass`` (0: the streak alone);
-before that it is tentative.
+a row with round(mass) >= 1 at peaks within ``phd.confirm_gate`` of each other (its streak);
+before that it is tentative (a heavy one may confirm at once: heavy_peak_confirmation.py).
 Why: a clutter-born cloud can reach round(mass) = 1 on one scan but seldom stays that heavy
-twice; without confirmation every such cloud would start a (false) track. The mass of a
-measurement-born cloud after its second scan is the PHD's probability that the two scans saw
-one target, tau / (kappa + tau) (phd_filter.update_weights), so a heavy cloud has already
-passed the test a streak stands for; a pass at 4 m/step holds a target for two or three scans
-(the first only seeds its birth), so a streak of two costs a target seen twice.
+twice; without confirmation every such cloud would start a (false) track.
 Switch: ``additions.confirmation`` (off: state_extraction.FirstEstimate).
 """
 
 import numpy as np
 
-from sat_agent.config import PhdParams
+from sat_agent.beyond_paper.heavy_peak_confirmation import heavy_mass
+from sat_agent.config import SatParams
 
 
 class ScanConfirmation:
-    """Streaks of peaks across scans; confirmed at ``phd.confirm_scans``."""
+    """Streaks of peaks across scans; confirmed at ``phd.confirm_scans`` (or a heavy mass)."""
 
-    def __init__(self, phd: PhdParams):
-        self._scans = int(phd.confirm_scans)
-        self._gate = float(phd.confirm_gate)
-        self._mass = float(phd.confirm_mass)
+    def __init__(self, params: SatParams):
+        self._scans = int(params.phd.confirm_scans)
+        self._gate = float(params.phd.confirm_gate)
+        self._mass = heavy_mass(params)
 
     def streak(self, peak: np.ndarray, memory) -> int:
         """Count the scans in a row with round(mass) >= 1 at this peak, this one included.
@@ -43,4 +39,4 @@ class ScanConfirmation:
 
     def confirmed(self, streak: int, mass: float) -> bool:
         """Whether a peak with this streak and PHD mass is a target."""
-        return streak >= self._scans or 0.0 < self._mass <= mass
+        return streak >= self._scans or mass >= self._mass
