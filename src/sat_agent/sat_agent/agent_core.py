@@ -23,8 +23,10 @@
    control (Eqn. track_control) on the predicted PHD and the predicted multi-target state
    X-hat_{k+1|k} in TRACK; with additions.investigation, a searching agent may instead look at
    a tentative peak with the tracking control, or keep a newborn spot in its next square
-   (beyond_paper/investigation.py). A baseline of ``search.policy`` (baselines/) replaces the
-   search control, or the whole control (PHD-Voronoi, Thompson sampling);
+   (beyond_paper/investigation.py), or, with additions.track_revisit, fly back over a target
+   it left to its coasting before the fit drifts off it (beyond_paper/track_revisit.py). A
+   baseline of ``search.policy`` (baselines/) replaces the search control, or the whole
+   control (PHD-Voronoi, Thompson sampling);
 7. publish the report of step k: search density, multi-target estimate, mode (what the paper
    exchanges) with agent id, step and pose as header. The coasted targets are in the output
    (``AgentOutput.reported_positions``), not in the report.
@@ -62,6 +64,7 @@ from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
 from sat_agent.beyond_paper.track_coasting import NoCoasting, TrackCoasting
 from sat_agent.beyond_paper.track_release import TrackRelease
+from sat_agent.beyond_paper.track_revisit import NoRevisit, TrackRevisit
 from sat_agent.config import ParameterError, SatParams
 from sat_agent.density_codec import encode_density
 from sat_agent.mode_machine import Mode, ModeMachine
@@ -212,6 +215,7 @@ class Agent:
                               else NoInvestigation())
         self.release = TrackRelease(params) if additions.track_release else KeepAll()
         self.coasting = TrackCoasting(params) if additions.track_coasting else NoCoasting()
+        self.revisit = TrackRevisit(params) if additions.track_revisit else NoRevisit()
         self._scratch = SearchDensity(self.filter.search.lattice, params)
         self._last_report: Optional[AgentReport] = None
         self.dropped_reports = 0
@@ -290,7 +294,8 @@ class Agent:
         at tentative peaks from SEARCH: the tracking control on X-hat_{k+1|k} (the looked-at
         peaks; in SEARCH the walk is kept for later; in TRACK without the targets released to a
         neighbour, additions.track_release); else the search move (walk or baseline), kept to
-        hold a newborn spot in view when the look asks it.
+        hold a newborn spot in view when the look asks it, or, for the walk, towards a coasted
+        target due for a revisit (additions.track_revisit; the walk is kept for later).
         """
         if self.baseline is not None and self.baseline.steers_tracking:
             return self.baseline.choose(pose, view)
@@ -304,8 +309,14 @@ class Agent:
                                              self.filter.search)
             plan = self.planner.walk_points() if mode == Mode.SEARCH else np.zeros((0, 2))
             return action, candidate_poses(pose, self.params.actions)[action], plan
-        action, goal, plan = (self.planner.choose(pose) if self.baseline is None
-                              else self.baseline.choose(pose, view))
+        if self.baseline is not None:
+            action, goal, plan = self.baseline.choose(pose, view)
+        else:
+            action, goal, plan = self.planner.choose(pose)
+            revisit = (self.revisit.revisit(view.step, pose, self.coasting.tracks, goal)
+                       if look.keep is None else None)
+            if revisit is not None:
+                look, goal = replace(look, keep=revisit.keep), revisit.goal
         if look.keep is not None:
             action = keep_in_view_action(pose, goal, self.params, look.keep)
         return action, goal, plan

@@ -322,6 +322,18 @@ class CooperationParams:
     follow_velocity_error: float = param(
         0.04, "additions.track_coasting: and the standard error of that track's fitted "
         'velocity is at most this (m/s; 0: the count alone)', low=0, high=100)
+    # Dev seeds 2601-2700 at random, paired with the persistent profile: 0.05 / 0.1 / 0.2 gave
+    # detected -2.5 / -4.3 / -3.6 points, tracked +0.4 / +0.9 / +0.0; 0.05 on fresh seeds
+    # 2701-3000: detected -0.1, tracked +2.2 (p < 0.001), OSPA -0.16 m (README, issue 15).
+    revisit_loss: float = param(
+        0.05, 'additions.track_revisit: a searching agent flies back over a coasted target once '
+        'the chance that its fit errs by more than phd.coast_gate when the agent gets there '
+        'reaches this', low=0, high=1, low_open=True)
+    # No bound by default: at revisit_loss 0.1, bounds of 10 and 20 m left almost no revisit
+    # (detected +0.7 and +0.0, tracked +0.3 and +0.1 on the same seeds).
+    revisit_detour: float = param(
+        float(MANY), 'additions.track_revisit: and flying over it lengthens the way to the '
+        "walk's next node by at most this (m)", low=0, high=MANY)
     track_search_tolerance: float = param(
         0.3, 'additions.search_while_tracking: epsilon, the share of the best Renyi divergence '
         '(Eqn. track_control) a tracking agent may give up to cover search worth', low=0,
@@ -337,7 +349,7 @@ class AdditionsParams:
     """Switches of the additions to the paper (module docstring; one module each in beyond_paper/).
 
     True is config/paper.yaml (our detection chain), False is the paper as written
-    (config/paper_strict.yaml); the persistent search-and-track additions (the last eight) are
+    (config/paper_strict.yaml); the persistent search-and-track additions (the last nine) are
     False in both, and config/persistent.yaml switches on all of them but search_while_tracking.
     Each switch is the only way to turn its addition off.
     """
@@ -413,6 +425,11 @@ class AdditionsParams:
         False, 'a TRACK episode with fewer than cooperation.track_probation steps with an '
         'estimated target ends on its first step without one instead of after '
         'cooperation.track_timeout (beyond_paper/track_probation.py)')
+    track_revisit: bool = param(
+        False, 'with additions.track_coasting, a searching agent flies back over a target it '
+        'left to its coasting once the fit may have drifted beyond phd.coast_gate with '
+        'probability cooperation.revisit_loss, instead of meeting it again by chance '
+        '(beyond_paper/track_revisit.py)')
 
 
 @dataclass(frozen=True)

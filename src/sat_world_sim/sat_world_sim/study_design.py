@@ -49,7 +49,7 @@ names them among the baselines the persistent profile must lead). 1800 runs took
 on an idle machine (``evaluate --dry-run`` prints the estimate from the last study's costs). Not in
 it, reachable with ``--design full`` or ``--only``: the paper setting's other policies, the
 ablation at paper and random (+22 min at random), the persistent profile's ablation at random
-(8 cells, ~+20 min) and the sweeps (+18 min).
+(9 cells, ~+23 min) and the sweeps (+18 min).
 
 Cells that cannot be built on this checkout (a profile file that does not exist yet, a policy
 or parameter the core does not know yet, e.g. on an older checkout) are skipped with a

@@ -104,6 +104,19 @@ class Track:
         variance = (residuals ** 2).sum() / (2 * (len(self.steps) - 2))
         return float(np.sqrt(variance / (offsets @ offsets)))
 
+    def prediction_error(self, step: int) -> float:
+        """Return the standard error (m) per axis of the fit's position at step.
+
+        The mean position's error sigma / sqrt(n) and the velocity's error times the steps from
+        the mean step, which are uncorrelated (_fit); inf with fewer than 3 estimates.
+        """
+        error = self.velocity_error()
+        if not np.isfinite(error):
+            return np.inf
+        offsets = np.asarray(self.steps, dtype=float) - np.mean(self.steps)
+        return float(error * np.sqrt(offsets @ offsets / len(self.steps)
+                                     + (step - np.mean(self.steps)) ** 2))
+
 
 def coast_steps(params: SatParams) -> int:
     """Return the largest t with p_S^t >= phd.coast_survival: the longest a track is coasted."""
@@ -140,6 +153,8 @@ class CoastingStep:
 
 class NoCoasting:
     """The paper's agent: it reports X-hat_k only and follows every target it estimates."""
+
+    tracks: tuple = ()
 
     def update(self, step: int, pose, estimates: Sequence, neighbour_poses,
                neighbour_targets) -> CoastingStep:
