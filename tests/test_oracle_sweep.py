@@ -3,12 +3,13 @@ import math
 import numpy as np
 import pytest
 
+from sat_agent.actions import top_speed
 from sat_agent.beyond_paper.track_coasting import coast_steps
 from sat_agent.config import SatParams
 from sat_agent.sensor_model import in_sensing_square
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.oracle_sweep import follow_position, lane_ends, lap_positions, run_oracle_sweep
-from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions, sweep_speed
+from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions
 from sat_world_sim.random_scenarios import random_scenario
 from sat_world_sim.scenario import scenario_from_mapping
 from sat_world_sim.world_model import World
@@ -31,7 +32,7 @@ def strip_cells(lanes: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize('agents', [1, 2, 4, 8])
 def test_the_oracle_visits_every_cell_of_its_strip_within_its_period(agents):
-    speed = sweep_speed(PARAMS)
+    speed = top_speed(PARAMS.actions)
     low, high = lane_ends(PARAMS)
     for lanes in strip_lanes(PARAMS, agents):
         lap = lap_positions(sweep_cycle(lanes, lane_ends(PARAMS)), speed)
@@ -56,7 +57,7 @@ def test_strips_are_disjoint_and_their_lanes_tile_the_area():
 
 
 def test_sweep_positions_start_at_the_start_and_never_exceed_the_speed():
-    speed = sweep_speed(PARAMS)
+    speed = top_speed(PARAMS.actions)
     cycle = sweep_cycle(strip_lanes(PARAMS, 4)[2], lane_ends(PARAMS))
     path = sweep_positions((12.3, 81.7), cycle, speed, 400)
     assert path.shape == (400, 2)
@@ -104,7 +105,7 @@ def followed_scenario(steps: int = 120):
 def test_sweep_and_track_follows_a_target_in_view_until_it_dies_then_sweeps_again():
     scenario = followed_scenario()
     run = run_oracle_sweep(scenario, PARAMS, follow=True)
-    speed = sweep_speed(PARAMS)
+    speed = top_speed(PARAMS.actions)
     poses = np.array([r.agent_poses[1] for r in run.records])
     assert np.hypot(*np.diff(poses, axis=0).T).max() <= speed + 1e-9
     alive = [r for r in run.records if 1 in r.truth_ids]
@@ -147,7 +148,7 @@ def test_sweep_and_track_gives_each_target_one_follower_and_finds_what_enters():
 
 
 def test_follow_position_aims_at_the_next_true_position_at_most_one_sweep_step_away():
-    speed = sweep_speed(PARAMS)
+    speed = top_speed(PARAMS.actions)
     # [x, vx, y, vy]: the target will be at (31, 40) after T = 1 s.
     np.testing.assert_allclose(follow_position((29.0, 40.0), (30.0, 1.0, 40.0, 0.0), speed,
                                                PARAMS), (31.0, 40.0))
@@ -167,8 +168,8 @@ def test_a_follow_limit_releases_the_target_for_good_and_sends_the_agent_back_to
     assert {m for r in run.records[10:] for m in r.modes.values()} == {'SEARCH'}
     poses = np.array([r.agent_poses[1] for r in run.records])
     cycle = sweep_cycle(strip_lanes(PARAMS, 2)[0], lane_ends(PARAMS))
-    np.testing.assert_allclose(poses[10:], sweep_positions(poses[10], cycle, sweep_speed(PARAMS),
-                                                           len(poses) - 10))
+    np.testing.assert_allclose(poses[10:], sweep_positions(
+        poses[10], cycle, top_speed(PARAMS.actions), len(poses) - 10))
     tracked = compute_metrics(run.records, scenario.name, 3)['summary']['tracked_share']
     assert tracked < 1.0
 
@@ -190,7 +191,7 @@ def test_with_one_follower_the_other_agent_sweeps_past_a_target_it_sees():
 def test_dispatch_sends_the_free_follower_to_a_target_another_agent_has_seen():
     scenario = followed_scenario()
     run = run_oracle_sweep(scenario, PARAMS, follow=True, followers=1, dispatch=True)
-    speed = sweep_speed(PARAMS)
+    speed = top_speed(PARAMS.actions)
     poses = np.array([r.agent_poses[2] for r in run.records])
     assert np.hypot(*np.diff(poses, axis=0).T).max() <= speed + 1e-9
     # Agent 1 sees the target at k = 1 (its start); agent 2, 70 m off, is dispatched at once

@@ -4,10 +4,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from sat_agent.actions import top_speed
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.track_coasting import Track, TrackCoasting
 from sat_agent.beyond_paper.track_revisit import (
-    KAPPA, loss_probability, meeting_step, NoRevisit, top_speed, TrackRevisit)
+    KAPPA, loss_probability, meeting_step, NoRevisit, TrackRevisit)
 from sat_agent.config import load_params_file
 from sat_agent.state_extraction import TargetEstimate
 from sat_world_sim.inprocess_swarm import InProcessSwarm
@@ -69,7 +70,7 @@ def test_the_loss_is_the_tail_of_a_gaussian_error_beyond_the_gate():
 
 
 def test_the_agent_meets_the_target_where_the_fit_will_be_when_it_gets_there():
-    speed = top_speed(PARAMS)
+    speed = top_speed(PARAMS.actions)
     assert speed == 4.0
     still = Track([1, 2, 3], [np.array([50.0, 50.0])] * 3, np.zeros(2))
     assert meeting_step(still, [10.0, 50.0], 10, speed) == 20        # 40 m at 4 m a step
@@ -91,10 +92,10 @@ def test_a_coasted_target_is_revisited_once_its_loss_reaches_the_threshold():
         if not coasting.tracks:
             break
         wanted = revisit.revisit(step, pose, coasting.tracks, pose)
-        lost = loss_probability(track, meeting_step(track, pose, step, top_speed(PARAMS)), gate)
+        arrival = meeting_step(track, pose, step, top_speed(PARAMS.actions))
+        lost = loss_probability(track, arrival, gate)
         assert (wanted is not None) == (lost >= PARAMS.cooperation.revisit_loss), step
         if wanted is not None:
-            arrival = meeting_step(track, pose, step, top_speed(PARAMS))
             np.testing.assert_allclose(wanted.goal, track.predict(arrival))
             np.testing.assert_allclose(wanted.keep, [track.predict(step + 1)])
             due.append(step)
@@ -110,13 +111,13 @@ def test_of_two_due_targets_the_nearer_is_revisited_first():
     step = 150
     pose = (a.predict(step) + b.predict(step)) / 2 + np.array([-10.0, 0.0])   # nearer to a
     wanted = TrackRevisit(PARAMS).revisit(step, pose, [b, a], pose)
-    arrival = meeting_step(a, pose, step, top_speed(PARAMS))
+    arrival = meeting_step(a, pose, step, top_speed(PARAMS.actions))
     np.testing.assert_allclose(wanted.goal, a.predict(arrival))
 
 
 def test_a_revisit_off_the_way_is_left_when_the_detour_is_bounded():
     track, step = _followed().tracks[0], 150
-    spot = track.predict(meeting_step(track, FAR, step, top_speed(PARAMS)))
+    spot = track.predict(meeting_step(track, FAR, step, top_speed(PARAMS.actions)))
     bounded = TrackRevisit(PARAMS.with_overrides({'cooperation.revisit_detour': 10.0}))
     # The walk's next node beyond the target, on the line from the pose: no detour.
     beyond = spot + (spot - FAR) / np.hypot(*(spot - FAR)) * 20.0

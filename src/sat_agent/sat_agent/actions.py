@@ -17,6 +17,11 @@ def action_displacements(params: ActionParams) -> np.ndarray:
     return np.vstack([np.zeros((1, 2)), moves])
 
 
+def top_speed(params: ActionParams) -> float:
+    """Return the longest displacement of one action, N_R Delta_R (m per step)."""
+    return params.n_radial * params.radial_step
+
+
 def candidate_poses(pose, params: ActionParams) -> np.ndarray:
     """Return the poses U_k reachable from pose in one step, one row per action index."""
     return np.asarray(pose, dtype=float) + action_displacements(params)

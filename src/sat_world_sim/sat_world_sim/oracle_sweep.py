@@ -59,7 +59,7 @@ from typing import List, Optional
 
 import numpy as np
 
-from sat_agent.actions import inside_area
+from sat_agent.actions import inside_area, top_speed
 from sat_agent.beyond_paper.track_coasting import coast_steps
 from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION, VELOCITY
@@ -74,11 +74,6 @@ from sat_world_sim.world_model import World
 # What the records say the agents do: the sweep searches for ever; sweep-and-track follows.
 MODE = 'SEARCH'
 FOLLOW_MODE = 'TRACK'
-
-
-def sweep_speed(params: SatParams) -> float:
-    """Return v, the largest displacement of one action (N_R Delta_R)."""
-    return params.actions.n_radial * params.actions.radial_step
 
 
 def strip_lanes(params: SatParams, agents: int) -> List[np.ndarray]:
@@ -214,7 +209,7 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
     started = time.perf_counter()
     world = World(scenario, params)
     ids = world.agent_ids
-    speed = sweep_speed(params)
+    speed = top_speed(params.actions)
     ends = lane_ends(params)
     starts = {a.agent_id: a.start for a in scenario.agents}
     team = {agent_id: _Sweeper(starts[agent_id], sweep_cycle(lanes, ends), speed, steps)

@@ -46,6 +46,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from sat_agent.actions import top_speed
 from sat_agent.beyond_paper.track_coasting import followed_long_enough, Track
 from sat_agent.config import SatParams
 from sat_agent.search_planning import MIN_COST
@@ -63,11 +64,6 @@ class Revisit:
 
     goal: np.ndarray
     keep: np.ndarray
-
-
-def top_speed(params: SatParams) -> float:
-    """Return the longest displacement of the control set (Eqn. controlVectors), m per step."""
-    return params.actions.radial_step * params.actions.n_radial
 
 
 def meeting_step(track: Track, pose, step: int, speed: float) -> int:
@@ -112,7 +108,7 @@ class TrackRevisit:
         pose = np.asarray(pose, dtype=float).reshape(2)
         walk_goal = np.asarray(walk_goal, dtype=float).reshape(2)
         direct = np.hypot(*(walk_goal - pose))
-        speed, gate = top_speed(params), params.phd.coast_gate
+        speed, gate = top_speed(params.actions), params.phd.coast_gate
         best, best_rate = None, 0.0
         # A handful of tracks per agent: this loop is over targets, not particles.
         for track in tracks:
@@ -123,11 +119,11 @@ class TrackRevisit:
             if lost < params.cooperation.revisit_loss:
                 continue
             goal = track.predict(arrival)
-            detour = np.hypot(*(goal - pose)) + np.hypot(*(walk_goal - goal)) - direct
-            if detour > params.cooperation.revisit_detour:
+            reach = float(np.hypot(*(goal - pose)))
+            if reach + np.hypot(*(walk_goal - goal)) - direct > params.cooperation.revisit_detour:
                 continue
             alive = params.motion.p_survival ** (arrival - track.steps[-1])
-            rate = alive * lost / max(float(np.hypot(*(goal - pose))), MIN_COST)
+            rate = alive * lost / max(reach, MIN_COST)
             if rate > best_rate:
                 best, best_rate = Revisit(goal, track.predict(step + 1)[None, :]), rate
         return best
