@@ -15,8 +15,9 @@ Two kinds of departure from the paper, kept apart:
   switches the detection chain's on, ``config/paper_strict.yaml`` all off, and
   ``config/persistent.yaml`` adds persistent search-and-track (regrowing density, persistent
   planning, track release, track coasting, kernel likelihood, heavy-peak confirmation, track
-  probation; search while tracking is built and left off) to paper.yaml's. Their numeric
-  tunables (e.g. ``search.investigate_steps``) tune an addition but cannot switch it off.
+  probation, track revisit; search while tracking is built and left off) to paper.yaml's. Their
+  numeric tunables (e.g. ``search.investigate_steps``) tune an addition but cannot switch it
+  off.
 - *Interpretations*: where the paper is silent or a literal reading cannot run, the simplest
   reading, in both profiles, no switch (each is stated where it is implemented, too):
 
