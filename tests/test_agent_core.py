@@ -230,6 +230,23 @@ def test_keep_in_view_action_keeps_a_point_inside_the_next_square():
     assert keep_in_view_action((50.0, 50.0), (60.0, 50.0), params, far) == 9
 
 
+def test_keep_in_view_action_holds_the_longest_run_of_points_from_the_first():
+    params = SatParams()
+    pose, goal = (50.0, 50.0), (50.0, 60.0)
+    poses = candidate_poses(pose, params.actions)
+    first, second, far = [47.0, 50.0], [53.0, 52.0], [90.0, 90.0]
+
+    def lands(keep):
+        return poses[keep_in_view_action(pose, goal, params, np.array(keep))]
+    # The first alone: 4 m north-west is the nearest to the goal of the moves holding it
+    # (3.5 m inside each edge); the second too: 2 m north, which holds both.
+    np.testing.assert_allclose(lands([first]), [50.0 - 2.0 * 2 ** 0.5, 50.0 + 2.0 * 2 ** 0.5])
+    np.testing.assert_allclose(lands([first, second]), [50.0, 52.0])
+    # A point no move can hold ends the run; first in the list, it lifts every limit.
+    np.testing.assert_allclose(lands([first, far, second]), lands([first]))
+    np.testing.assert_allclose(lands([far, first]), [50.0, 54.0])
+
+
 def test_searching_agent_keeps_a_spot_seen_once_in_its_next_square_then_resumes_its_walk():
     # The paper reading of the clutter: one measurement 4 m from the agent seeds 0.28 of birth
     # mass, above phd.tentative_threshold.

@@ -84,6 +84,23 @@ def test_a_newborn_spot_gets_one_step_and_a_light_one_none():
     assert light.peaks is None and light.keep is None
 
 
+def test_several_newborn_spots_heaviest_first_and_a_lower_mass_bar():
+    params = SatParams().with_overrides({'search.look_spots': 3})
+    threshold = params.phd.tentative_threshold
+    seen = BirthSpots(np.zeros((4, 2)), np.array([[10.0, 10.0], [20.0, 20.0], [30.0, 30.0],
+                                                  [40.0, 40.0]]),
+                      np.array([threshold, threshold + 0.2, threshold * 0.6, threshold + 0.1]))
+    # The three heaviest of at least the threshold, in order of mass; one by default.
+    np.testing.assert_allclose(Investigation(params).look(Mode.SEARCH, NOTHING, 0, seen).keep,
+                               [[20.0, 20.0], [40.0, 40.0], [10.0, 10.0]])
+    np.testing.assert_allclose(Investigation(SatParams()).look(Mode.SEARCH, NOTHING, 0, seen).keep,
+                               [[20.0, 20.0]])
+    # At half the threshold the light spot is looked at too, after the heavier ones.
+    lower = params.with_overrides({'search.look_spots': 4, 'search.look_spot_share': 0.5})
+    np.testing.assert_allclose(Investigation(lower).look(Mode.SEARCH, NOTHING, 0, seen).keep,
+                               [[20.0, 20.0], [40.0, 40.0], [10.0, 10.0], [30.0, 30.0]])
+
+
 def test_nothing_is_looked_at_while_tracking_or_in_the_rejoin_cooldown():
     params = SatParams()
     seen = tentative(peak((50.0, 50.0)))

@@ -94,3 +94,15 @@ def test_a_track_on_probation_ends_on_its_first_step_without_targets():
     assert machine.update(1, False) == Mode.TRACK
     assert machine.update(0, False) == Mode.SEARCH
     assert tracking_machine().update(0, False) == Mode.TRACK
+
+
+def test_a_tracker_leaving_followed_targets_has_the_follow_cooldown():
+    machine = tracking_machine()
+    assert machine.update(1, False, followed=True) == Mode.SEARCH and machine.switched
+    assert machine.cooldown_left == PARAMS.cooperation.follow_cooldown == 10
+    none = tracking_machine(PARAMS.with_overrides({'cooperation.follow_cooldown': 0}))
+    assert none.update(1, False, followed=True) == Mode.SEARCH and none.cooldown_left == 0
+    assert none.update(1, False) == Mode.TRACK
+    # An overlap exit keeps its own cooldown whatever the follow cooldown is.
+    assert none.update(1, True, followed=True) == Mode.SEARCH
+    assert none.cooldown_left == PARAMS.cooperation.rejoin_cooldown

@@ -270,7 +270,7 @@ class Agent:
         leaving_for = self._overlap_leaver(step, reports) if was_tracking else None
         # A tracker whose targets are all followed long enough searches on (track_coasting).
         followed = was_tracking and estimate.targets and not coasting.fresh
-        mode = self.modes.update(coasting.fresh, leaving_for is not None or followed)
+        mode = self.modes.update(coasting.fresh, leaving_for is not None, followed)
         replan = ReplanReason.NONE
         if mode == Mode.SEARCH and self.baseline is None:
             replan = self._search_plan(step, pose, reports, searchers, resumed=was_tracking)

@@ -258,6 +258,16 @@ class SearchParams:
     investigate_steps: int = param(
         4, 'additions.investigation: steps a searching agent may spend looking at one '
         'tentative peak', low=1, high=MANY, live=True)
+    # One spot, the heaviest, of at least phd.tentative_threshold by default: the addition as it
+    # was first measured. 3 spots at a share 0.5 (session 23, persistent profile, random, dev
+    # seeds 3701-4000): fewer targets seen and never detected (116 to 98 of 1843) but fewer
+    # seen at all (1429 to 1399), tracked -0.1 points; not kept (docs/persistent_trials.md).
+    look_spots: int = param(
+        1, 'additions.investigation: newborn spots a searching agent keeps in its next square, '
+        'heaviest first, as many as one move can hold', low=1, high=MANY)
+    look_spot_share: float = param(
+        1.0, 'additions.investigation: a newborn spot is kept in view when its measurement '
+        'seeds at least this share of phd.tentative_threshold', low=0, high=10, low_open=True)
     # Follows the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
     replan_period: int = param(
         10, 'additions.persistent_planning: every agent in SEARCH replans (jointly with the '
@@ -323,6 +333,15 @@ class CooperationParams:
     follow_velocity_error: float = param(
         0.04, "additions.track_coasting: and the standard error of that track's fitted "
         'velocity is at most this (m/s; 0: the count alone)', low=0, high=100)
+    # The mode counts the targets not yet followed, so a followed target cannot make the leaver
+    # track again; what the cooldown stops after such an exit is any other target and every
+    # look (additions.investigation). 0 with search.look_spots 3 (session 23, persistent
+    # profile, random): tracked -0.1 points, detected -1.4 on fresh dev seeds 3401-3700; not
+    # kept (docs/persistent_trials.md).
+    follow_cooldown: int = param(
+        10, 'additions.track_coasting: with additions.rejoin_cooldown, a tracker that leaves '
+        'TRACK because its targets are followed ignores estimated targets (and looks at '
+        'nothing) for this many steps', low=0, high=MANY)
     # Dev seeds 2601-2700 at random, paired with the persistent profile: 0.05 / 0.1 / 0.2 gave
     # detected -2.5 / -4.3 / -3.6 points, tracked +0.4 / +0.9 / +0.0; 0.05 on fresh seeds
     # 2701-3000: detected -0.1, tracked +2.2 (p < 0.001), OSPA -0.16 m (README, issue 15).

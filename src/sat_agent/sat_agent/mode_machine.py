@@ -34,7 +34,7 @@ class NoCooldown:
 
     left = 0
 
-    def start(self) -> None:
+    def start(self, steps: int) -> None:
         """Do nothing: the paper's leaver has nothing to count."""
 
     def hold(self) -> bool:
@@ -60,8 +60,8 @@ class ModeMachine:
         self._timeout = int(params.cooperation.track_timeout)
         self._probation = (TrackProbation(params.cooperation.track_probation)
                            if params.additions.track_probation else NoProbation())
-        self._cooldown = (RejoinCooldown(params.cooperation.rejoin_cooldown)
-                          if params.additions.rejoin_cooldown else NoCooldown())
+        self._cooldown = RejoinCooldown() if params.additions.rejoin_cooldown else NoCooldown()
+        self._cooldowns = (params.cooperation.rejoin_cooldown, params.cooperation.follow_cooldown)
         self.mode = Mode.SEARCH
         self.switched = False
         self._steps_without_targets = 0
@@ -71,17 +71,20 @@ class ModeMachine:
         """Steps during which estimated targets are still ignored after an overlap exit."""
         return self._cooldown.left
 
-    def update(self, n_targets: int, leave_tracking: bool) -> Mode:
+    def update(self, n_targets: int, leave_tracking: bool, followed: bool = False) -> Mode:
         """Advance one step with the number of estimated targets; return the (new) mode.
 
-        leave_tracking: this agent is the leaver of a tracking overlap (ignored in SEARCH).
-        ``switched`` tells whether this update changed the mode.
+        leave_tracking: this agent is the leaver of a tracking overlap; followed: its targets
+        are followed long enough (additions.track_coasting); both ignored in SEARCH. Either
+        leaves TRACK, with the cooldown of ``cooperation.rejoin_cooldown`` or
+        ``cooperation.follow_cooldown`` steps. ``switched`` tells whether this update changed
+        the mode.
         """
         if int(n_targets) != n_targets or n_targets < 0:
             raise ValueError(f'n_targets = {n_targets!r}: must be an integer >= 0')
         previous = self.mode
         if self.mode == Mode.TRACK:
-            self._update_tracking(int(n_targets), bool(leave_tracking))
+            self._update_tracking(int(n_targets), bool(leave_tracking), bool(followed))
         elif not self._cooldown.hold() and n_targets > 0:
             self.mode = Mode.TRACK
             self._steps_without_targets = 0
@@ -89,10 +92,10 @@ class ModeMachine:
         self.switched = self.mode != previous
         return self.mode
 
-    def _update_tracking(self, n_targets: int, leave_tracking: bool):
-        if leave_tracking:
+    def _update_tracking(self, n_targets: int, leave_tracking: bool, followed: bool):
+        if leave_tracking or followed:
             self.mode = Mode.SEARCH
-            self._cooldown.start()
+            self._cooldown.start(self._cooldowns[0 if leave_tracking else 1])
             return
         self._steps_without_targets = 0 if n_targets > 0 else self._steps_without_targets + 1
         on_probation = self._probation.ends(n_targets)

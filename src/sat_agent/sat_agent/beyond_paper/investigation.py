@@ -83,7 +83,7 @@ class Investigation:
             look = self._look      # a peak that faded for a scan: keep it in view one step
         else:
             self._investigated = 0
-            look = self._fresh(self._newborn_spots(birth_spots))[:1]
+            look = self._fresh(self._newborn_spots(birth_spots))[:self.params.search.look_spots]
             if not look:
                 return NO_LOOK
         if self._investigated >= budget:
@@ -104,9 +104,10 @@ class Investigation:
             np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
 
     def _newborn_spots(self, spots: BirthSpots) -> tuple:
-        """Return this scan's birth spots of at least phd.tentative_threshold, heaviest first."""
+        """Return this scan's spots of search.look_spot_share x phd.tentative_threshold+."""
+        least = self.params.search.look_spot_share * self.params.phd.tentative_threshold
         order = np.argsort(-spots.masses, kind='stable')
-        order = order[spots.masses[order] >= self.params.phd.tentative_threshold]
+        order = order[spots.masses[order] >= least]
         return tuple(TargetEstimate(spots.positions[i].copy(), np.zeros(2), np.zeros((4, 4)),
                                     float(spots.masses[i])) for i in order)
 
@@ -114,9 +115,10 @@ class Investigation:
 def keep_in_view_action(pose, goal, params: SatParams, keep: np.ndarray) -> int:
     """Return the search control's action (search_planning.search_action) keeping points in view.
 
-    keep: (K, 2) points the next sensing square must hold at least
+    keep: (K, 2) points, most wanted first, the next sensing square must hold at least
     ``cooperation.track_edge_margin`` inside its edges (a newborn's measurement is off by
-    sigma_r ~ 1 m); when no admissible action's square holds them all, no limit. Ties go to the
+    sigma_r ~ 1 m): the moves kept are those holding the longest run of them from the first
+    that some admissible action holds; when none holds the first, no limit. Ties go to the
     lowest action index.
     """
     pose = np.asarray(pose, dtype=float).reshape(2)
@@ -125,7 +127,9 @@ def keep_in_view_action(pose, goal, params: SatParams, keep: np.ndarray) -> int:
     allowed = admissible_mask(pose, params.actions, params.area)
     points = np.asarray(keep, dtype=float).reshape(-1, 2)
     inner = params.sensor.square_side - 2.0 * params.cooperation.track_edge_margin
-    holding = in_sensing_square(points[None, :, :], poses[:, None, :], inner).all(axis=1)
-    if np.any(allowed & holding):
-        distances[~holding] = np.inf
+    holding = in_sensing_square(points[None, :, :], poses[:, None, :], inner)
+    held = np.logical_and.accumulate(holding, axis=1).sum(axis=1)
+    most = held[allowed].max(initial=0)
+    if most > 0:
+        distances[held < most] = np.inf
     return int(np.argmin(distances))

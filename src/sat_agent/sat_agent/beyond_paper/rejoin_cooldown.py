@@ -4,7 +4,8 @@ Paper: when two agents track the same targets, one of them "generates a search p
 in the next time-step to search" (Section "Multi-agent Tracking", a); an agent in SEARCH
 switches to TRACK when it estimates targets.
 Addition: the leaver ignores its estimated targets (stays in SEARCH, looks at nothing) for
-``cooperation.rejoin_cooldown`` steps.
+``cooperation.rejoin_cooldown`` steps; a tracker that leaves because its targets are followed
+(additions.track_coasting) for ``cooperation.follow_cooldown`` steps.
 Why: the leaver still sees the abandoned targets for a few steps while it flies off; re-entering
 TRACK then would undo the overlap resolution, and the two agents would overlap again. The mode
 machine only sees target counts, so the cooldown is on time, not on target identity: 10 steps
@@ -17,13 +18,12 @@ Switch: ``additions.rejoin_cooldown`` (off: mode_machine.NoCooldown).
 class RejoinCooldown:
     """Counts the steps during which estimated targets are ignored after an overlap exit."""
 
-    def __init__(self, steps: int):
-        self._steps = int(steps)
+    def __init__(self):
         self.left = 0
 
-    def start(self) -> None:
-        """Start counting: the agent has just left TRACK because of an overlap."""
-        self.left = self._steps
+    def start(self, steps: int) -> None:
+        """Start counting `steps`: the agent has just left TRACK (an overlap, followed targets)."""
+        self.left = int(steps)
 
     def hold(self) -> bool:
         """Count one step in SEARCH; return whether targets are still ignored at this step."""
