@@ -11,8 +11,9 @@ The track timeout is an interpretation: the paper does not say when TRACK ends. 
 
 The paper's leaver searches from the next step and, like every searching agent, tracks again on
 its next estimate (``NoCooldown``). The addition ``additions.rejoin_cooldown`` makes it ignore
-estimated targets for ``cooperation.rejoin_cooldown`` steps first
-(beyond_paper/rejoin_cooldown.py).
+estimated targets for ``cooperation.rejoin_cooldown`` steps first, and a tracker that leaves
+because its targets are followed (additions.track_coasting) for
+``cooperation.follow_cooldown`` steps (beyond_paper/rejoin_cooldown.py).
 """
 
 import enum
@@ -61,14 +62,15 @@ class ModeMachine:
         self._probation = (TrackProbation(params.cooperation.track_probation)
                            if params.additions.track_probation else NoProbation())
         self._cooldown = RejoinCooldown() if params.additions.rejoin_cooldown else NoCooldown()
-        self._cooldowns = (params.cooperation.rejoin_cooldown, params.cooperation.follow_cooldown)
+        self._rejoin_cooldown = params.cooperation.rejoin_cooldown
+        self._follow_cooldown = params.cooperation.follow_cooldown
         self.mode = Mode.SEARCH
         self.switched = False
         self._steps_without_targets = 0
 
     @property
     def cooldown_left(self) -> int:
-        """Steps during which estimated targets are still ignored after an overlap exit."""
+        """Steps during which estimated targets are still ignored after leaving TRACK."""
         return self._cooldown.left
 
     def update(self, n_targets: int, leave_tracking: bool, followed: bool = False) -> Mode:
@@ -95,7 +97,8 @@ class ModeMachine:
     def _update_tracking(self, n_targets: int, leave_tracking: bool, followed: bool):
         if leave_tracking or followed:
             self.mode = Mode.SEARCH
-            self._cooldown.start(self._cooldowns[0 if leave_tracking else 1])
+            self._cooldown.start(self._rejoin_cooldown if leave_tracking
+                                 else self._follow_cooldown)
             return
         self._steps_without_targets = 0 if n_targets > 0 else self._steps_without_targets + 1
         on_probation = self._probation.ends(n_targets)

@@ -11,16 +11,18 @@ is abandoned: tentative peaks near it (within ``phd.continue_gate``) are ignored
 2 * investigate_steps steps. Without a tentative peak, the heaviest newborn spot of this scan
 (a measurement seeding at least ``phd.tentative_threshold`` of birth mass) gets one step of the
 budget, spent on the search move that keeps the spot ``cooperation.track_edge_margin`` inside
-the next square (``keep_in_view_action``): a real target is then a tentative peak at the next
-scan, a false alarm leaves nothing and the walk resumes at once. Nothing is looked at during
-the rejoin cooldown after an overlap exit. A peak that fades for a scan (a miss, a near pass)
-is looked at like a newborn spot: one step of the budget on the search move that keeps it,
-where its velocity takes it, in the next square; back at the next scan it is a tentative peak
-again, gone it is left. Following it with the tracking control for the rest of the budget
-instead (tried, session 16) detected no more on the dev seeds 2001-2100 (persistent -0.6
-points at random and -5.0 at paper_random, cooperative +0.0 at paper_random) and searched
-2.4 points less of the area by k = 100 with two agents (for one step only: 0.9 less);
-README, issue 15.
+the next square (``keep_in_view_action``; ``search.look_spots`` > 1 keeps as many of the
+heaviest as one move can hold, ``search.look_spot_share`` < 1 lowers the bar, both measured
+and left at 1 in session 23, README issue 15): a real target is then a tentative peak at the
+next scan, a false alarm leaves nothing and the walk resumes at once. Nothing is looked at
+during the rejoin cooldown (after an overlap exit or leaving followed targets). A peak that
+fades for a scan (a miss, a near pass) is looked at like a newborn spot: one step of the budget
+on the search move that keeps it, where its velocity takes it, in the next square; back at the
+next scan it is a tentative peak again, gone it is left. Following it with the tracking
+control for the rest of the budget instead (tried, session 16) detected no more on the dev
+seeds 2001-2100 (persistent -0.6 points at random and -5.0 at paper_random, cooperative +0.0
+at paper_random) and searched 2.4 points less of the area by k = 100 with two agents (for one
+step only: 0.9 less); README, issue 15.
 Why: one pass of a searching agent gives a target 2-3 scans, too few to confirm it under
 clutter (a tracked target's PHD mass grows by ~1 + g / kappa per scan, and not at all while
 the agent flies over it); and newborns the next square does not cover are dropped
@@ -104,7 +106,7 @@ class Investigation:
             np.hypot(*(t.position - p)) <= gate for p, _ in self._abandoned))
 
     def _newborn_spots(self, spots: BirthSpots) -> tuple:
-        """Return this scan's spots of search.look_spot_share x phd.tentative_threshold+."""
+        """Return this scan's spots seeding the least birth mass looked at, heaviest first."""
         least = self.params.search.look_spot_share * self.params.phd.tentative_threshold
         order = np.argsort(-spots.masses, kind='stable')
         order = order[spots.masses[order] >= least]

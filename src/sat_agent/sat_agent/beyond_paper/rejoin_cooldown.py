@@ -16,7 +16,7 @@ Switch: ``additions.rejoin_cooldown`` (off: mode_machine.NoCooldown).
 
 
 class RejoinCooldown:
-    """Counts the steps during which estimated targets are ignored after an overlap exit."""
+    """Counts the steps during which estimated targets are ignored after leaving TRACK."""
 
     def __init__(self):
         self.left = 0
