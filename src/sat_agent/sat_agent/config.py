@@ -61,6 +61,8 @@ from sat_agent.parameter_schema import (build, group, param, ParameterError, val
 
 SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk', 'phd_voronoi', 'thompson')
 SEARCH_PLANNERS = ('greedy', 'ortools')
+BIRTH_PRIORS = ('uniform', 'undetected')
+SCAN_DETECTIONS = ('square', 'births')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
 
@@ -161,6 +163,18 @@ class PhdParams:
     # 0.12: there 0.15-0.2 made false tracks on consecutive scans.
     birth_mass_measurement: float = param(
         0.5, 'm_b: birth mass a measurement in the sensing square may seed', low=0, high=10)
+    # 'undetected' moves a square's seeded mass to where its search density holds undetected
+    # targets (beyond_paper/undetected_birth_prior.py). Session 24 (persistent profile, random,
+    # fresh dev seeds 4001-4300): detected -3.7, tracked -3.1 points (p 0.005); with the blur of
+    # 1.125 m and search.scan_detection 'births' (4301-4600) +0.5 and +0.2: not kept
+    # (docs/persistent_trials.md).
+    birth_prior: str = param(
+        'uniform', 'where the measurement-driven births assume undetected targets: '
+        "'uniform' over the sensing square (phd_filter), 'undetected' as the search density "
+        'holds them (beyond_paper/undetected_birth_prior.py)', choices=BIRTH_PRIORS)
+    birth_prior_blur: float = param(
+        0.0, "phd.birth_prior 'undetected': the undetected density is read at a measurement "
+        'through a Gaussian blur of this spread (m; 0: its own cell)', low=0, high=100)
     birth_particles_per_measurement: int = param(100, 'particles per measurement-driven birth',
                                                  low=0, high=1e5)
     birth_velocity_std: float = param(1.0, "prior spread of a newborn's velocity (m/s)",
@@ -239,6 +253,14 @@ class SearchParams:
 
     decay: float = param(0.999, 'J_k(x), constant (Section Evaluation)', low=0, high=1)
     # Shared by every agent, so densities fuse elementwise.
+    # 'births' counts a scan as detecting a target only where its measurement lands in the
+    # square, where births are seeded (beyond_paper/regrowing_density.py). Session 24
+    # (persistent profile, random, fresh dev seeds 4301-4600): detected -1.4, tracked -0.4
+    # points, neither significant: not kept (docs/persistent_trials.md).
+    scan_detection: str = param(
+        'square', 'additions.regrowing_density: what a scan detects of the undetected targets: '
+        "'square' p_D in every cell of the sensing square, 'births' p_D times the chance that "
+        "the cell's target's measurement lands in the square", choices=SCAN_DETECTIONS)
     lattice_spacing: float = param(1.0, 'spacing of the virtual-target lattice (m)',
                                    low=0, low_open=True)
     # One node per sensing footprint, so visiting every node sweeps the whole area once.

@@ -32,7 +32,10 @@ Birth intensity b_k(x) of Eqn. satphd_predict, with x = [p, v] (position p, velo
 
 Both parts are interpretations: the paper leaves the birth model open. The addition
 ``additions.newborn_gate`` drops the newborns the next square does not cover
-(beyond_paper/newborn_gate.py; ``keep_newborns`` is the paper's).
+(beyond_paper/newborn_gate.py; ``keep_newborns`` is the paper's). ``phd.birth_prior``
+'undetected' weighs m_z by where the search density holds undetected targets instead of taking
+them uniform over the square (beyond_paper/undetected_birth_prior.py; ``uniform_prior`` is the
+default); m_z is capped at 1 either way.
 
 Gating: p_D is 0 outside the sensing square, so the update leaves those particles' weights
 unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the particles inside
@@ -47,7 +50,8 @@ import numpy as np
 from sat_agent import motion_model, sensor_model
 from sat_agent.beyond_paper.kernel_likelihood import filter_bandwidth
 from sat_agent.beyond_paper.newborn_gate import untested_newborns
-from sat_agent.config import PhdParams, SatParams, SensorParams
+from sat_agent.beyond_paper.undetected_birth_prior import undetected_prior
+from sat_agent.config import BIRTH_PRIORS, PhdParams, SatParams, SensorParams
 from sat_agent.search_density import Lattice, SearchDensity
 
 # Largest exponent used when scaling the clutter term; exp(700) is finite in float64, and a
@@ -186,24 +190,37 @@ class BirthSpots:
         return cls(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0))
 
 
+def uniform_prior(density, positions: np.ndarray, pose, blur: float = 0.0) -> np.ndarray:
+    """Return w = 1 for each position: undetected targets uniform over the square."""
+    return np.ones(len(np.asarray(positions).reshape(-1, 2)))
+
+
+# phd.birth_prior's choices, in config.BIRTH_PRIORS' order.
+PRIOR_OF = dict(zip(BIRTH_PRIORS, (uniform_prior, undetected_prior)))
+
+
 def birth_spots(measurements: np.ndarray, pose, params: SatParams,
-                explained: Optional[np.ndarray] = None) -> BirthSpots:
+                explained: Optional[np.ndarray] = None,
+                prior: Optional[np.ndarray] = None) -> BirthSpots:
     """Measurements of Z' (positions in the sensing square) with their birth masses m_z.
 
     explained: (M,) share tau / (kappa + tau) of each measurement already explained by the
     targets (update_weights); a measurement only seeds the unexplained rest of its mass.
+    prior: (M,) weight w(z) of the undetected-target density at each measurement against a
+    uniform one (``phd.birth_prior``; None: 1). m_z is capped at 1, one target.
     """
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     sensor = params.sensor
     unexplained = np.ones(len(z)) if explained is None else 1.0 - np.asarray(explained, float)
+    weight = np.ones(len(z)) if prior is None else np.asarray(prior, dtype=float)
     positions = sensor_model.to_position(z, pose)
     keep = sensor_model.in_sensing_square(positions, pose, sensor.square_side)
     # Birth intensity uniform over the square's area: in measurement space its density grows
     # with the range (dx dy = r dr dtheta) while the clutter's is flat, so a far measurement is
-    # more likely a new target than a near one; mass m_z = m_b (r / r_max) (1 - explained).
+    # more likely a new target than a near one; mass m_z = m_b (r / r_max) (1 - explained) w.
     masses = (params.phd.birth_mass_measurement * np.minimum(z[keep, 0] / sensor.max_range, 1.0)
-              * np.clip(unexplained[keep], 0.0, 1.0))
-    return BirthSpots(z[keep], positions[keep], masses)
+              * np.clip(unexplained[keep], 0.0, 1.0) * weight[keep])
+    return BirthSpots(z[keep], positions[keep], np.minimum(masses, 1.0))
 
 
 def measurement_births(spots: BirthSpots, pose, params: SatParams,
@@ -250,6 +267,7 @@ class SatPhdFilter:
         self._dropped_newborns = (untested_newborns if params.additions.newborn_gate
                                   else keep_newborns)
         self.bandwidth = filter_bandwidth(params)
+        self._birth_prior = PRIOR_OF[params.phd.birth_prior]
 
     def predict(self, previous_pose) -> None:
         """Eqn. satphd_predict: survival p_S, NCV transition, births, search-density decay."""
@@ -276,7 +294,11 @@ class SatPhdFilter:
                                          params.sensor)
         weights[self._newborn.start + np.flatnonzero(dropped)] = 0.0
         self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
+        # The births' prior is the density before this scan's correction (as the scan found it).
+        prior = self._birth_prior(self.search, sensor_model.to_position(
+            np.asarray(measurements, dtype=float).reshape(-1, 2), pose), pose,
+            params.phd.birth_prior_blur)
         self.search.correct(pose)
-        self.birth_spots = birth_spots(measurements, pose, params, explained)
+        self.birth_spots = birth_spots(measurements, pose, params, explained, prior)
         self.pending_births = measurement_births(self.birth_spots, pose, params, self.rng)
         self._newborn = slice(0, 0)

@@ -36,6 +36,7 @@ where s is the lattice spacing and n_v the number of cells whose centre lies in 
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import ndimage
 
 from sat_agent.beyond_paper.regrowing_density import expected_undetected, Regrowth
 from sat_agent.config import AreaParams, ParameterError, SatParams
@@ -103,8 +104,11 @@ class ConstantDecay:
             ahead[window] = kept * self.decay ** (steps - 1)
         return ahead
 
-    def corrected(self, seen: np.ndarray) -> np.ndarray:
-        """Last two terms of Eqn. satphd_correct in stored units: observed cells become 1."""
+    def corrected(self, seen: np.ndarray, offsets=None) -> np.ndarray:
+        """Last two terms of Eqn. satphd_correct in stored units: observed cells become 1.
+
+        offsets (the cells' rows and columns from the pose) are not used: p_D is 1.
+        """
         return np.ones_like(seen)
 
 
@@ -167,7 +171,9 @@ class SearchDensity:
         """
         window = self._observed_window(pose, self._side)
         if window is not None:
-            self.values[window] = self.model.corrected(self.values[window])
+            rows, cols = window
+            offsets = (self._yc[rows] - float(pose[1]), self._xc[cols] - float(pose[0]))
+            self.values[window] = self.model.corrected(self.values[window], offsets)
 
     def node_values(self, node_centers: np.ndarray, node_spacing: float) -> np.ndarray:
         """Eqn. search_value for every node: the mean of values over its region r_v.
@@ -196,12 +202,25 @@ class SearchDensity:
 
         The sum of u = -ln v over the cells the square observes (as ``correct`` would).
         """
+        return np.array([self.undetected_in_square(pose).sum()
+                         for pose in np.asarray(poses, dtype=float).reshape(-1, 2)])
+
+    def undetected_in_square(self, pose) -> np.ndarray:
+        """Return u = -ln v of the cells S_a(pose) observes, flat (the cells ``correct`` sets)."""
+        window = self._observed_window(pose, self._side)
+        return np.zeros(0) if window is None else expected_undetected(self.values[window]).ravel()
+
+    def undetected_at(self, points: np.ndarray, blur: float = 0.0) -> np.ndarray:
+        """Return u = -ln v of the cell nearest to each of (n, 2) points.
+
+        blur > 0 (m): u blurred first by a Gaussian of that spread (reflected at the border).
+        """
+        points = np.asarray(points, dtype=float).reshape(-1, 2)
         u = expected_undetected(self.values)
-        worth = np.zeros(len(poses))
-        for index, pose in enumerate(np.asarray(poses, dtype=float).reshape(-1, 2)):
-            window = self._observed_window(pose, self._side)
-            worth[index] = 0.0 if window is None else u[window].sum()
-        return worth
+        if blur > 0.0 and len(points):
+            u = ndimage.gaussian_filter(u, blur / self.lattice.spacing, mode='reflect')
+        return u[self._nearest_index(self._yc, points[:, 1]),
+                 self._nearest_index(self._xc, points[:, 0])]
 
     def _region_sums(self, cell_values: np.ndarray, node_centers: np.ndarray,
                      node_spacing: float):

@@ -40,6 +40,10 @@ satphd_correct:
 
     u_k(c) = (1 - p_D) u_{k|k-1}(c) for c in S_a(s_k), u_{k|k-1}(c) elsewhere.
 
+(``search.scan_detection`` 'births', beyond the paper, trialled in session 24 and not kept:
+p_D P_in(c) instead of p_D, P_in(c) the chance that the measurement of a target at c lands in
+the square, where the filter seeds births; ``birth_detection``.)
+
 What is stored is v_k(c) = exp(-u_k(c)): under the PHD's Poisson approximation the
 probability that no undetected target is in c now. It keeps the paper's convention (values in
 [0, 1], 1 = just searched with p_D = 1) and its fusion: the elementwise max of v is the min of
@@ -80,6 +84,7 @@ import numpy as np
 from scipy import ndimage, special
 
 from sat_agent.config import SatParams
+from sat_agent.sensor_model import measurement_sigmas
 
 # Kernel taps are added until the next one is below this share of the kernel's mass: the
 # truncated kernel's variance is then that of the untruncated one to ~1e-12.
@@ -116,6 +121,21 @@ def discrete_gaussian(variance: float) -> np.ndarray:
     return taps / taps.sum()
 
 
+def birth_detection(offsets, half: float, sigma: float) -> np.ndarray:
+    """Return P_in per cell: a target there gives a measurement inside the square (births).
+
+    offsets: (rows' y, columns' x) from the pose; the square is [-half, half]^2. Per axis the
+    measurement errs N(0, sigma^2) (the range sigma, taken along both axes), so P_in is the
+    product of the two axes' Gaussian masses over [-half, half]: ~1 at the centre, 1/2 at an
+    edge's middle, 1/4 at a corner. A measurement outside the square seeds no birth (phd_filter),
+    so the scan detects the target there only with p_D P_in (``search.scan_detection``).
+    """
+    rows, cols = (np.asarray(a, dtype=float) for a in offsets)
+    per_axis = [special.ndtr((half - a) / sigma) - special.ndtr((-half - a) / sigma)
+                for a in (rows, cols)]
+    return np.outer(per_axis[0], per_axis[1])
+
+
 class Regrowth:
     """The undetected-target model of the search density (module docstring).
 
@@ -130,6 +150,11 @@ class Regrowth:
         self.birth = params.phd.birth_rate / cells
         self.survival = params.motion.p_survival
         self.miss = 1.0 - params.sensor.p_detect
+        self.half_side = params.sensor.square_side / 2.0
+        # The range sigma at the square's half side: the noise that carries an edge target's
+        # measurement out of the square.
+        self.edge_sigma = (float(measurement_sigmas(self.half_side, params.sensor)[0])
+                           if params.search.scan_detection == 'births' else None)
         self.kernel = discrete_gaussian(step_variance(params) / spacing ** 2)
 
     def predicted(self, values: np.ndarray, window, steps: int) -> np.ndarray:
@@ -149,9 +174,16 @@ class Regrowth:
         across = ndimage.convolve1d(u, self.kernel, axis=1, mode='reflect')
         return ndimage.convolve1d(across, self.kernel, axis=0, mode='reflect')
 
-    def corrected(self, seen: np.ndarray) -> np.ndarray:
-        """Return v of the cells in the square after the scan: v^(1 - p_D), u times 1 - p_D."""
-        return np.power(seen, self.miss)
+    def corrected(self, seen: np.ndarray, offsets=None) -> np.ndarray:
+        """Return v of the cells in the square after the scan: v^(1 - d), u times 1 - d.
+
+        d = p_D, or with ``search.scan_detection`` 'births' p_D P_in (``birth_detection``;
+        offsets: the rows' y and the columns' x from the pose, needed then).
+        """
+        if self.edge_sigma is None:
+            return np.power(seen, self.miss)
+        detect = (1.0 - self.miss) * birth_detection(offsets, self.half_side, self.edge_sigma)
+        return np.power(seen, 1.0 - detect)
 
     def stationary(self) -> float:
         """Return u per cell with no search at all: b / (1 - p_S) (inf when p_S = 1)."""
