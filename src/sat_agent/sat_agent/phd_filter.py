@@ -34,8 +34,8 @@ Both parts are interpretations: the paper leaves the birth model open. The addit
 ``additions.newborn_gate`` drops the newborns the next square does not cover
 (beyond_paper/newborn_gate.py; ``keep_newborns`` is the paper's). ``phd.birth_prior``
 'undetected' weighs m_z by where the search density holds undetected targets instead of taking
-them uniform over the square (beyond_paper/undetected_birth_prior.py; ``uniform_prior`` is the
-default); m_z is capped at 1 either way.
+them uniform over the square (beyond_paper/undetected_birth_prior.py; the default 'uniform' weighs
+nothing); m_z is capped at 1 either way.
 
 Gating: p_D is 0 outside the sensing square, so the update leaves those particles' weights
 unchanged, (1 - 0) w = w; ``update_weights`` computes likelihoods only for the particles inside
@@ -190,13 +190,8 @@ class BirthSpots:
         return cls(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0))
 
 
-def uniform_prior(density, positions: np.ndarray, pose, blur: float = 0.0) -> np.ndarray:
-    """Return w = 1 for each position: undetected targets uniform over the square."""
-    return np.ones(len(np.asarray(positions).reshape(-1, 2)))
-
-
-# phd.birth_prior's choices, in config.BIRTH_PRIORS' order.
-PRIOR_OF = dict(zip(BIRTH_PRIORS, (uniform_prior, undetected_prior)))
+# phd.birth_prior's choices, in config.BIRTH_PRIORS' order; 'uniform' weighs nothing (w = 1).
+PRIOR_OF = dict(zip(BIRTH_PRIORS, (None, undetected_prior)))
 
 
 def birth_spots(measurements: np.ndarray, pose, params: SatParams,
@@ -295,8 +290,8 @@ class SatPhdFilter:
         weights[self._newborn.start + np.flatnonzero(dropped)] = 0.0
         self.targets = resample(ParticlePHD(self.targets.states, weights), params.phd, self.rng)
         # The births' prior is the density before this scan's correction (as the scan found it).
-        prior = self._birth_prior(self.search, sensor_model.to_position(
-            np.asarray(measurements, dtype=float).reshape(-1, 2), pose), pose,
+        prior = None if self._birth_prior is None else self._birth_prior(
+            self.search, sensor_model.to_position(measurements, pose), pose,
             params.phd.birth_prior_blur)
         self.search.correct(pose)
         self.birth_spots = birth_spots(measurements, pose, params, explained, prior)

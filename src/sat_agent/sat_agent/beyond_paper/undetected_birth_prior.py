@@ -36,7 +36,7 @@ Measured (session 24, persistent profile, random, 300 fresh dev seeds each, pair
 detected -3.7 and tracked -3.1 points (the density counts a square's edge and a cell the noisy
 measurement fell into as scanned); blurred by 1.125 m with search.scan_detection 'births',
 +0.5 and +0.2, not significant. Not kept: docs/persistent_trials.md.
-Choice: ``phd.birth_prior`` ('uniform': phd_filter.uniform_prior, w = 1).
+Choice: ``phd.birth_prior`` ('uniform': w = 1, phd_filter.PRIOR_OF).
 """
 
 import numpy as np
