@@ -12,7 +12,10 @@ floors hold at once (detected >= 90 % of the oracle sweep's, tracked >= 45 %, OS
 ``--dispatch`` sends a free follower to any target the team has seen, not only one in its square
 (oracle_sweep.py's two other readings); ``--coast`` has every agent also report the targets it
 saw and no longer sees, moved on at their true velocity (oracle_sweep.py, the oracle reading of
-additions.track_coasting). No filter, no radio: a run costs ~0.2 s. Then, from
+additions.track_coasting); ``--scans N --window W`` counts a target found only once one agent
+has had it in view on N of its last W steps (oracle_sweep.py's sensor-limited reading: a
+detector that needs N scans; the floors stay those of the perfect sensor's sweep). No filter,
+no radio: a run costs ~0.2 s. Then, from
 an evaluation.csv (``--csv``, make evaluate's by default), the persistent profile's means on
 the same metrics and its paired differences to the oracle sweep-and-track cell (follow limit
 none, every agent a follower, no dispatch) on the seeds both have, with the tables' 95 %
@@ -20,7 +23,7 @@ bootstrap CI and Wilcoxon mark (paired_statistics.py).
 
     scripts/with_env.sh python scripts/oracle_frontier.py [--setting random] [--seeds 50]
         [--first-seed 1] [--limits 0 15 30 60 100 none] [--followers F] [--dispatch] [--coast]
-        [--csv docs/evaluation.csv]
+        [--scans 1 --window 1] [--csv docs/evaluation.csv]
 """
 
 import argparse
@@ -56,11 +59,11 @@ def limit_value(text: str):
 
 
 def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = False,
-                   coast: bool = False) -> dict:
+                   coast: bool = False, scans: int = 1, window: int = 1) -> dict:
     """Return the mean METRICS of the oracle with one follow limit (0: the sweep).
 
-    followers, dispatch, coast: run_oracle_sweep's (None, False, False: the sweep-and-track
-    cell).
+    followers, dispatch, coast, scans, window: run_oracle_sweep's (None, False, False, 1, 1:
+    the sweep-and-track cell).
     """
     cell = default_cell(setting, 'oracle', policy=ORACLE, planner='none')
     params = cell.params(load_params_file(ROOT / 'config' / f'{cell.profile}.yaml'))
@@ -69,7 +72,8 @@ def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = 
     for seed in seeds:
         scenario = scenario_for(cell, seed, params, paper)
         run = run_oracle_sweep(scenario, params, follow=limit != 0, follow_limit=limit,
-                               followers=followers, dispatch=dispatch, coast=coast)
+                               followers=followers, dispatch=dispatch, coast=coast,
+                               scans=scans, window=window)
         rows.append(compute_metrics(run.records, scenario.name, seed)['summary'])
     return {name: float(np.mean([row[name] for row in rows])) for name in METRICS}
 
@@ -108,6 +112,10 @@ def main(argv=None) -> int:
                         help='free followers take any target the team has seen')
     parser.add_argument('--coast', action='store_true',
                         help='agents also report the targets they saw, moved on at true velocity')
+    parser.add_argument('--scans', type=int, default=1,
+                        help='scans of a target one agent needs within --window to find it')
+    parser.add_argument('--window', type=int, default=None,
+                        help='steps within which the --scans count (default: --scans)')
     parser.add_argument('--csv', default=str(ROOT / 'docs' / RUNS_CSV),
                         help='evaluation.csv with the persistent and sweep-and-track cells')
     args = parser.parse_args(argv)
@@ -115,6 +123,9 @@ def main(argv=None) -> int:
         parser.error(f'--seeds {args.seeds}: must be >= 1')
     if args.followers is not None and args.followers < 0:
         parser.error(f'--followers {args.followers}: must be >= 0')
+    window = args.scans if args.window is None else args.window
+    if not 1 <= args.scans <= window:
+        parser.error(f'--scans {args.scans} --window {window}: need 1 <= scans <= window')
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     sweep = frontier_point(args.setting, seeds, 0)
     print(f'{args.setting}, seeds {seeds.start}-{seeds.stop - 1}; floors: detected >= '
@@ -122,14 +133,15 @@ def main(argv=None) -> int:
           f'tracked >= {TRACKED_FLOOR:.0%}, OSPA <= {OSPA_FLOOR:g} m; followers: '
           f'{"all" if args.followers is None else args.followers}'
           f'{", dispatched to any target seen" if args.dispatch else ""}'
-          f'{", coasting what they saw" if args.coast else ""}')
+          f'{", coasting what they saw" if args.coast else ""}'
+          f'{f", found on {args.scans} scans in {window} steps" if window > 1 else ""}')
     print('| follow limit (steps) | detected % | tracked % | OSPA (m) | all floors |')
     print('| --- | --- | --- | --- | --- |')
     for limit in args.limits:
         try:
-            point = (sweep if limit == 0 and not args.coast else
+            point = (sweep if limit == 0 and not args.coast and window == 1 else
                      frontier_point(args.setting, seeds, limit, args.followers, args.dispatch,
-                                    args.coast))
+                                    args.coast, args.scans, window))
         except ValueError as error:
             parser.error(f'--followers {args.followers}: {error}')
         met = (point['detected_share'] >= CEILING_SHARE * sweep['detected_share']

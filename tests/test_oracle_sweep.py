@@ -8,7 +8,8 @@ from sat_agent.beyond_paper.track_coasting import coast_steps
 from sat_agent.config import SatParams
 from sat_agent.sensor_model import in_sensing_square
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.oracle_sweep import follow_position, lane_ends, lap_positions, run_oracle_sweep
+from sat_world_sim.oracle_sweep import Confirmation, follow_position, lane_ends, lap_positions
+from sat_world_sim.oracle_sweep import run_oracle_sweep
 from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions
 from sat_world_sim.random_scenarios import random_scenario
 from sat_world_sim.scenario import scenario_from_mapping
@@ -235,3 +236,61 @@ def test_coasting_reports_a_released_target_on_its_walk_and_a_dead_one_until_the
     assert summary['tracked_share'] == 1.0 > compute_metrics(
         plain.records, scenario.name, 3)['summary']['tracked_share']
     assert summary['false_track_steps'] == len(false)
+
+
+@pytest.mark.parametrize('scans, window', [(2, 2), (2, 4), (3, 4)])
+def test_a_multi_scan_oracle_reports_a_target_once_one_agent_saw_it_often_enough(scans, window):
+    scenario = random_scenario(5, 4, 200)
+    run = run_oracle_sweep(scenario, PARAMS, scans=scans, window=window)
+    sweep = run_oracle_sweep(scenario, PARAMS)
+    found, glimpsed = set(), set()
+    views = {}  # (agent, target) -> steps it was in that agent's square
+    for mine, perfect in zip(run.records, sweep.records):
+        # The sweep's paths do not depend on what it finds.
+        for agent in perfect.agent_poses:
+            np.testing.assert_allclose(mine.agent_poses[agent], perfect.agent_poses[agent])
+        for agent, pose in perfect.agent_poses.items():
+            seen = in_sensing_square(perfect.truth_positions, pose, SIDE)
+            for target in perfect.truth_ids[seen].tolist():
+                glimpsed.add(target)
+                steps = views.setdefault((agent, target), [])
+                steps.append(perfect.step)
+                if sum(s > perfect.step - window for s in steps) >= scans:
+                    found.add(target)
+        for agent, pose in perfect.agent_poses.items():
+            seen = in_sensing_square(perfect.truth_positions, pose, SIDE)
+            expected = seen & np.isin(perfect.truth_ids, list(found))
+            np.testing.assert_allclose(mine.estimates[agent], perfect.truth_positions[expected])
+    summary = compute_metrics(run.records, scenario.name, 5)['summary']
+    assert summary['detected_share'] == len(found) / len(scenario.targets)
+    assert found <= glimpsed
+
+
+def test_a_two_scan_follower_starts_following_at_the_second_scan():
+    scenario = followed_scenario()
+    run = run_oracle_sweep(scenario, PARAMS, follow=True, scans=2, window=2)
+    # Agent 1 starts on the target and still has it in view after its first move.
+    assert run.records[0].modes[1] == 'SEARCH' and len(run.records[0].estimates[1]) == 0
+    for record in run.records[1:60]:
+        assert record.modes[1] == 'TRACK'
+        np.testing.assert_allclose(record.estimates[1], record.truth_positions)
+    summary = compute_metrics(run.records, scenario.name, 3)['summary']
+    assert summary['tracked_share'] == pytest.approx(59 / 60)
+    with pytest.raises(ValueError, match='scans = 3, window = 2'):
+        run_oracle_sweep(scenario, PARAMS, scans=3, window=2)
+
+
+def test_the_scans_must_fall_within_the_window_and_come_from_one_agent():
+    ids = np.array([7, 8])
+    only_7, none = np.array([True, False]), np.array([False, False])
+    # Agent 1 sees target 7 at steps 1 and 3, agent 2 at step 2.
+    views = {1: {1: only_7, 2: none}, 2: {1: none, 2: only_7}, 3: {1: only_7, 2: none}}
+    for window, found_at in ((2, None), (3, 3)):
+        confirmation = Confirmation(2, window)
+        reported = [confirmation.found_in_view(step, ids, views[step])[1][0] for step in (1, 2, 3)]
+        assert reported == [False, False, found_at == 3]
+    # Once found, every agent reports it in view, here agent 2 at its single glimpse.
+    confirmation = Confirmation(2, 3)
+    for step in (1, 2, 3):
+        confirmation.found_in_view(step, ids, views[step])
+    assert confirmation.found_in_view(4, ids, {1: none, 2: only_7})[2].tolist() == [True, False]

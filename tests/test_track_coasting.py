@@ -193,3 +193,22 @@ def test_a_followed_target_releases_the_tracker_to_search(coast):
         assert min(reported[first_track + 2:]) >= 1      # the target stays reported
     else:
         assert modes[-1] == Mode.TRACK
+
+
+@pytest.mark.parametrize('boundary', ['drop', 'reflect'])
+def test_a_fit_that_leaves_the_area_ends_or_folds_back_as_phd_coast_boundary_says(boundary):
+    coasting = TrackCoasting(PARAMS.with_overrides({'phd.coast_boundary': boundary}))
+    start = (20.0, 10.0)          # y = 10 - 0.3 k leaves the area after k = 33
+    for k in range(1, 21):
+        coasting.update(k, _walk(k, start), [_estimate(_walk(k, start), VELOCITY)], NONE, NONE)
+    for k in range(21, 34):
+        step = coasting.update(k, FAR, [], NONE, NONE)
+        np.testing.assert_allclose(step.coasted, [_walk(k, start)])
+    step = coasting.update(40, FAR, [], NONE, NONE)
+    if boundary == 'drop':
+        assert step.coasted.shape == (0, 2) and coasting.tracks == []
+    else:
+        # Mirrored at y = 0 as the world's reflect does: 10 - 12 = -2 becomes 2.
+        np.testing.assert_allclose(step.coasted, [(44.0, 2.0)])
+        np.testing.assert_allclose(step.expected, [(44.6, 2.3)])
+        np.testing.assert_allclose(coasting.tracks[0].predict(40), (44.0, 2.0))

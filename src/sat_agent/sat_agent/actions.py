@@ -27,6 +27,19 @@ def candidate_poses(pose, params: ActionParams) -> np.ndarray:
     return np.asarray(pose, dtype=float) + action_displacements(params)
 
 
+def fold(coordinates, upper: float):
+    """Mirror coordinates back into [0, upper] at its ends, for any overshoot.
+
+    Returns (folded coordinates, how many times each crossed an end): a coordinate that crossed
+    b times is mirrored b times, as a walker bouncing off the ends of [0, upper].
+    """
+    coordinates = np.asarray(coordinates, dtype=float)
+    crossings = np.abs(np.floor(coordinates / upper)).astype(int)
+    crossings = np.where(coordinates == upper, 0, crossings)
+    wrapped = np.mod(coordinates, 2.0 * upper)
+    return np.where(wrapped > upper, 2.0 * upper - wrapped, wrapped), crossings
+
+
 def inside_area(points: np.ndarray, area: AreaParams) -> np.ndarray:
     """Mask of (N, 2) points inside the closed region [0, width] x [0, height]."""
     p = np.asarray(points, dtype=float).reshape(-1, 2)

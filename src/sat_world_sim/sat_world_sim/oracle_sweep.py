@@ -52,6 +52,15 @@ k - s <= track_coasting.coast_steps (p_S^t >= phd.coast_survival), the target is
 (else the agent seeing it reports it), the point is not in the agent's own square (it would
 see the target there) and inside the area. A target that died out of view is reported on (a
 false track) until one of these ends it, as the addition's track would be.
+
+With ``scans`` N and ``window`` W (the sensor-limited reading, session 25) a target counts as
+found only once one agent has had it in its square on N of that agent's last W steps, as the
+filter needs more than one scan of a measurement among clutter to confirm a target
+(additions.confirmation: two scans with round(mass) >= 1). From then on the team knows it: every
+agent reports it (and may follow or coast it) whenever it is in that agent's square. Before,
+nobody reports it, even in view. N = W = 1 is the perfect sensor above. The paths are the
+sweep's: no agent turns back for a target seen once, as the filter's looks do, so this is the
+ceiling of a sweep with a multi-scan detector, not of our policy.
 """
 
 import time
@@ -193,13 +202,15 @@ def _assign_followers(team, truth, poses, in_view: dict, row: int, released: set
 def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int] = None,
                      follow: bool = False, follow_limit: Optional[int] = None,
                      followers: Optional[int] = None, dispatch: bool = False,
-                     coast: bool = False) -> SwarmRun:
+                     coast: bool = False, scans: int = 1, window: int = 1) -> SwarmRun:
     """Run the oracle sweep (follow: sweep-and-track) over the scenario's truth (docstring).
 
     follow_limit: the most steps an agent follows one target (None: until it dies).
     followers: how many agents may follow, the highest ids (None: all of them).
     dispatch: free followers take any target seen so far, not only one in their square.
     coast: report the targets seen before and out of view now (module docstring).
+    scans, window: a target is found once one agent had it in view on scans of its last window
+    steps (module docstring; 1 and 1: at first sight).
 
     Records as the in-process swarm's. The truth is the World's, so for a seed the oracle meets
     the same targets as every policy. final_density is the coverage (1 where some square has
@@ -224,11 +235,13 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
     released = set()
     known = set() if dispatch else None
     coasting = _Coasting(params) if coast else None
+    confirmation = Confirmation(scans, window)
     records = []
     for row in range(steps):
         truth = world.truth()
         poses = world.poses()
-        in_view = {a: in_sensing_square(truth.positions, poses[a], side) for a in ids}
+        in_view = confirmation.found_in_view(world.step, truth.ids, {
+            a: in_sensing_square(truth.positions, poses[a], side) for a in ids})
         if dispatch:
             known.update(truth.ids[np.any(list(in_view.values()), axis=0)].tolist())
         if follow:
@@ -263,6 +276,34 @@ def _next_position(sweeper: _Sweeper, pose, truth, speed: float,
         return sweeper.next_sweep_position()
     (row,) = np.flatnonzero(truth.ids == sweeper.target)
     return follow_position(pose, truth.states[row], speed, params)
+
+
+class Confirmation:
+    """Which targets the team has found: one agent had each in view on scans of its last window.
+
+    Module docstring (the sensor-limited reading). Per agent, target id -> the steps it was in
+    that agent's square within the window.
+    """
+
+    def __init__(self, scans: int, window: int):
+        if not 1 <= scans <= window:
+            raise ValueError(f'oracle sweep: scans = {scans}, window = {window}: need '
+                             '1 <= scans <= window')
+        self.scans, self.window = scans, window
+        self.found = set()
+        self.views = {}
+
+    def found_in_view(self, step: int, ids: np.ndarray, in_view: dict) -> dict:
+        """Return agent id -> mask over the truth rows: in its square and found by the team."""
+        for agent_id in sorted(in_view):
+            views = self.views.setdefault(agent_id, {})
+            for target_id in ids[in_view[agent_id]].tolist():
+                views[target_id] = [s for s in views.get(target_id, [])
+                                    if s > step - self.window] + [step]
+                if len(views[target_id]) >= self.scans:
+                    self.found.add(target_id)
+        known = np.isin(ids, list(self.found))
+        return {agent_id: mask & known for agent_id, mask in in_view.items()}
 
 
 class _Coasting:

@@ -20,7 +20,7 @@ from typing import Dict, FrozenSet, Mapping, Tuple
 
 import numpy as np
 
-from sat_agent.actions import candidate_poses, inside_area
+from sat_agent.actions import candidate_poses, fold, inside_area
 from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION, positions, propagate, VELOCITY
 from sat_agent.sensor_model import simulate_scan
@@ -253,10 +253,6 @@ def reflect(states: np.ndarray, width: float, height: float) -> np.ndarray:
     """
     out = states.copy()
     for pos_col, vel_col, upper in ((0, 1, width), (2, 3, height)):
-        pos = states[:, pos_col]
-        crossings = np.abs(np.floor(pos / upper)).astype(int)
-        crossings = np.where(pos == upper, 0, crossings)
-        wrapped = np.mod(pos, 2.0 * upper)
-        out[:, pos_col] = np.where(wrapped > upper, 2.0 * upper - wrapped, wrapped)
+        out[:, pos_col], crossings = fold(states[:, pos_col], upper)
         out[:, vel_col] = np.where(crossings % 2 == 1, -states[:, vel_col], states[:, vel_col])
     return out

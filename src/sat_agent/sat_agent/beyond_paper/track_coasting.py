@@ -18,7 +18,11 @@ Addition, three parts:
    position has lain in the agent's square, or in the square a neighbour in range scanned at
    k - 1, on more than ``phd.coast_misses`` steps without an estimate of it (looked and not
    found), it leaves the area A, or a neighbour in range reports a target within the gate of
-   it (that neighbour sees it; two reports of one target would count one as false). Its next
+   it (that neighbour sees it; two reports of one target would count one as false). With
+   ``phd.coast_boundary`` 'reflect' (session 25) the fit is not ended at the border of A but
+   folded back into it, as the world's targets bounce (world_model.reflect) and the regrowing
+   density keeps undetected targets in A; every use of the fit (the report, the gate, the
+   revisit's goal) then sees the folded walk. Its next
    position is added to the extraction's expected targets (track continuity), so the target
    continues at once when it walks back into the square instead of waiting for confirmation.
 3. Follow, then search. A tracking agent leaves TRACK (as an overlap leaver does, so
@@ -50,11 +54,11 @@ until it loses its targets).
 """
 
 from dataclasses import dataclass, field
-from typing import List, Sequence
+from typing import List, Optional, Sequence
 
 import numpy as np
 
-from sat_agent.actions import inside_area
+from sat_agent.actions import fold, inside_area
 from sat_agent.config import SatParams
 from sat_agent.ospa import gated_pairs
 from sat_agent.sensor_model import in_sensing_square
@@ -70,6 +74,8 @@ class Track:
     misses: int = 0
     # Estimates over the track's whole life (steps keeps only the latest).
     length: int = 1
+    # (width, height) of the area the fit is folded into (phd.coast_boundary 'reflect').
+    bounds: Optional[tuple] = None
 
     def _fit(self):
         """Least-squares constant-velocity fit: (step offsets, mean position, velocity).
@@ -85,12 +91,17 @@ class Track:
     def predict(self, step: int) -> np.ndarray:
         """Evaluate the track's constant-velocity fit at step.
 
-        With one estimate, its filter velocity (the peak's particles) carries it.
+        With one estimate, its filter velocity (the peak's particles) carries it. With bounds,
+        the walk is folded back into [0, width] x [0, height] (module docstring, part 2).
         """
         if len(self.steps) < 2:
-            return self.positions[-1] + (step - self.steps[-1]) * self.velocity
-        offsets, mean, velocity = self._fit()
-        return mean + (step - np.mean(self.steps)) * velocity
+            position = self.positions[-1] + (step - self.steps[-1]) * self.velocity
+        else:
+            offsets, mean, velocity = self._fit()
+            position = mean + (step - np.mean(self.steps)) * velocity
+        if self.bounds is None:
+            return position
+        return np.array([fold(value, upper)[0] for value, upper in zip(position, self.bounds)])
 
     def velocity_error(self) -> float:
         """Return the standard error (m/s) of the fitted velocity per axis, from the residuals.
@@ -209,11 +220,17 @@ class TrackCoasting:
         for e in range(len(estimates)):
             if e not in matched_estimates:
                 kept.append(Track([int(step)], [positions[e].copy()],
-                                  np.asarray(estimates[e].velocity, dtype=float).copy()))
+                                  np.asarray(estimates[e].velocity, dtype=float).copy(),
+                                  bounds=self._bounds()))
         self.tracks = kept
         expected = [track.predict(step + 1) for track in kept if track.steps[-1] < step]
         return CoastingStep(np.array(coasted).reshape(-1, 2), fresh,
                             np.array(expected).reshape(-1, 2))
+
+    def _bounds(self) -> Optional[tuple]:
+        """Return the area a new track's fit is folded into, if phd.coast_boundary says so."""
+        area = self.params.area
+        return (area.width, area.height) if self.params.phd.coast_boundary == 'reflect' else None
 
     def _believed(self, track: Track, position: np.ndarray, step: int,
                   neighbour_targets) -> bool:
