@@ -134,12 +134,12 @@ def main(argv=None) -> int:
           f'{"all" if args.followers is None else args.followers}'
           f'{", dispatched to any target seen" if args.dispatch else ""}'
           f'{", coasting what they saw" if args.coast else ""}'
-          f'{f", found on {args.scans} scans in {window} steps" if window > 1 else ""}')
+          f'{f", found on {args.scans} scans in {window} steps" if args.scans > 1 else ""}')
     print('| follow limit (steps) | detected % | tracked % | OSPA (m) | all floors |')
     print('| --- | --- | --- | --- | --- |')
     for limit in args.limits:
         try:
-            point = (sweep if limit == 0 and not args.coast and window == 1 else
+            point = (sweep if limit == 0 and not args.coast and args.scans == 1 else
                      frontier_point(args.setting, seeds, limit, args.followers, args.dispatch,
                                     args.coast, args.scans, window))
         except ValueError as error:

@@ -27,8 +27,10 @@ def candidate_poses(pose, params: ActionParams) -> np.ndarray:
     return np.asarray(pose, dtype=float) + action_displacements(params)
 
 
-def fold(coordinates, upper: float):
+def fold(coordinates, upper):
     """Mirror coordinates back into [0, upper] at its ends, for any overshoot.
+
+    upper: a float, or one per coordinate (broadcast: (x, y) against (width, height)).
 
     Returns (folded coordinates, how many times each crossed an end): a coordinate that crossed
     b times is mirrored b times, as a walker bouncing off the ends of [0, upper].

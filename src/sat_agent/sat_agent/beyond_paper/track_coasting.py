@@ -101,7 +101,7 @@ class Track:
             position = mean + (step - np.mean(self.steps)) * velocity
         if self.bounds is None:
             return position
-        return np.array([fold(value, upper)[0] for value, upper in zip(position, self.bounds)])
+        return fold(position, np.asarray(self.bounds, dtype=float))[0]
 
     def velocity_error(self) -> float:
         """Return the standard error (m/s) of the fitted velocity per axis, from the residuals.
