@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from sat_agent.actions import fold
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.track_coasting import (
     coast_steps, NoCoasting, Track, TrackCoasting)
@@ -212,3 +213,40 @@ def test_a_fit_that_leaves_the_area_ends_or_folds_back_as_phd_coast_boundary_say
         np.testing.assert_allclose(step.coasted, [(44.0, 2.0)])
         np.testing.assert_allclose(step.expected, [(44.6, 2.3)])
         np.testing.assert_allclose(coasting.tracks[0].predict(40), (44.0, 2.0))
+
+
+@pytest.mark.parametrize('boundary', ['reflect', 'bounce'])
+def test_a_followed_target_that_bounces_keeps_one_straight_fit_only_with_bounce(boundary):
+    coasting = TrackCoasting(PARAMS.with_overrides({'phd.coast_boundary': boundary}))
+    start, area = (20.0, 10.0), np.array([100.0, 100.0])
+
+    def seen(k):          # the world's target: y = 10 - 0.3 k bounces off y = 0 at k = 33.3
+        return fold(_walk(k, start), area)[0]
+
+    for k in range(1, 51):
+        coasting.update(k, seen(k), [_estimate(seen(k), VELOCITY)], NONE, NONE)
+    if boundary == 'bounce':
+        assert len(coasting.tracks) == 1 and coasting.tracks[0].length == 50
+        # Stored on the unfolded walk: the last estimate is y = 10 - 15 = -5, not 5.
+        np.testing.assert_allclose(coasting.tracks[0].positions[-1], _walk(50, start))
+        # Coasted 20 steps on, the fit of the unbroken line lands on the target.
+        np.testing.assert_allclose(coasting.update(70, FAR, [], NONE, NONE).coasted, [seen(70)])
+    else:
+        # The estimates after the bounce bend the fitted line until one falls outside the
+        # gate: the target starts a new track, its history (and follow count) lost.
+        assert len(coasting.tracks) == 1 and coasting.tracks[0].length < 10
+
+
+def test_an_estimate_is_unfolded_to_the_mirror_image_nearest_the_fit():
+    track = Track([1, 2, 3], [np.array([50.0, 3.0]), np.array([50.0, 2.0]),
+                              np.array([50.0, 1.0])], np.zeros(2), bounds=(100.0, 100.0),
+                  unfolds=True)
+    # The line is at y = -1 at step 5 (folded: 1); an estimate at y = 1.4 lies 0.4 m beyond
+    # the folded point, so 0.4 m short of the line's -1 on the unfolded walk.
+    track.add(5, np.array([50.2, 1.4]), np.zeros(2), history=50)
+    np.testing.assert_allclose(track.positions[-1], (50.2, -1.4))
+    # Mirrored at x = 100 and y = 0 at once (two axes, one crossing each).
+    corner = Track([0, 1], [np.array([98.0, 2.0]), np.array([99.0, 1.0])], np.zeros(2),
+                   bounds=(100.0, 100.0), unfolds=True)
+    corner.add(3, np.array([98.5, 1.5]), np.zeros(2), history=50)
+    np.testing.assert_allclose(corner.positions[-1], (101.5, -1.5))

@@ -63,7 +63,7 @@ SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk', 'phd_voronoi', 'thompson')
 SEARCH_PLANNERS = ('greedy', 'ortools')
 BIRTH_PRIORS = ('uniform', 'undetected')
 SCAN_DETECTIONS = ('square', 'births')
-COAST_BOUNDARIES = ('drop', 'reflect')
+COAST_BOUNDARIES = ('drop', 'reflect', 'bounce')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
 
@@ -251,7 +251,8 @@ class PhdParams:
     # are remade with it (docs/persistent_trials.md).
     coast_boundary: str = param(
         'drop', "additions.track_coasting: a coasted fit that leaves the area: 'drop' ends the "
-        "track, 'reflect' folds the walk back into the area as the world's targets bounce",
+        "track, 'reflect' folds the walk back into the area as the world's targets bounce, "
+        "'bounce' also fits the estimates after a bounce on the unfolded walk",
         choices=COAST_BOUNDARIES)
 
 

@@ -22,7 +22,10 @@ Addition, three parts:
    ``phd.coast_boundary`` 'reflect' (session 25) the fit is not ended at the border of A but
    folded back into it, as the world's targets bounce (world_model.reflect) and the regrowing
    density keeps undetected targets in A; every use of the fit (the report, the gate, the
-   revisit's goal) then sees the folded walk. Its next
+   revisit's goal) then sees the folded walk. 'reflect' folds the fit's prediction only, so
+   the estimates of a target after its bounce join a history fitted as one line before it;
+   'bounce' (session 26) stores each estimate as its mirror image on the fit's unfolded walk,
+   so the fit stays the straight line the world's target walks (Track.add). Its next
    position is added to the extraction's expected targets (track continuity), so the target
    continues at once when it walks back into the square instead of waiting for confirmation.
 3. Follow, then search. A tracking agent leaves TRACK (as an overlap leaver does, so
@@ -74,8 +77,11 @@ class Track:
     misses: int = 0
     # Estimates over the track's whole life (steps keeps only the latest).
     length: int = 1
-    # (width, height) of the area the fit is folded into (phd.coast_boundary 'reflect').
+    # (width, height) of the area the fit is folded into (phd.coast_boundary 'reflect' or
+    # 'bounce').
     bounds: Optional[tuple] = None
+    # 'bounce': positions hold the estimates on the unfolded walk, so the fit stays one line.
+    unfolds: bool = False
 
     def _fit(self):
         """Least-squares constant-velocity fit: (step offsets, mean position, velocity).
@@ -88,20 +94,45 @@ class Track:
         mean = positions.mean(axis=0)
         return offsets, mean, offsets @ (positions - mean) / (offsets @ offsets)
 
-    def predict(self, step: int) -> np.ndarray:
-        """Evaluate the track's constant-velocity fit at step.
+    def _line(self, step: int) -> np.ndarray:
+        """Evaluate the track's constant-velocity fit at step, before any fold.
 
-        With one estimate, its filter velocity (the peak's particles) carries it. With bounds,
-        the walk is folded back into [0, width] x [0, height] (module docstring, part 2).
+        With one estimate, its filter velocity (the peak's particles) carries it.
         """
         if len(self.steps) < 2:
-            position = self.positions[-1] + (step - self.steps[-1]) * self.velocity
-        else:
-            offsets, mean, velocity = self._fit()
-            position = mean + (step - np.mean(self.steps)) * velocity
+            return self.positions[-1] + (step - self.steps[-1]) * self.velocity
+        offsets, mean, velocity = self._fit()
+        return mean + (step - np.mean(self.steps)) * velocity
+
+    def predict(self, step: int) -> np.ndarray:
+        """Return where the track's fit puts the target at step.
+
+        With bounds, the fit's walk is folded back into [0, width] x [0, height] (module
+        docstring, part 2).
+        """
         if self.bounds is None:
-            return position
-        return fold(position, np.asarray(self.bounds, dtype=float))[0]
+            return self._line(step)
+        return fold(self._line(step), np.asarray(self.bounds, dtype=float))[0]
+
+    def add(self, step: int, position: np.ndarray, velocity: np.ndarray, history: int):
+        """Continue the track with an estimate at step, keeping its latest history ones.
+
+        With ``unfolds`` the estimate is stored as its mirror image on the fit's unfolded walk
+        (the image the fold maps to it, nearest the fit's line), so a walk that bounced off a
+        border is still one straight line to fit (module docstring, part 2).
+        """
+        position = np.asarray(position, dtype=float)
+        if self.unfolds:
+            line = self._line(step)
+            folded, crossings = fold(line, np.asarray(self.bounds, dtype=float))
+            # Each crossing mirrors the axis: near the line the fold is +-1 times a shift.
+            position = line + (position - folded) * (-1.0) ** crossings
+        self.steps.append(int(step))
+        self.positions.append(position.copy())
+        del self.steps[:-history], self.positions[:-history]
+        self.velocity = np.asarray(velocity, dtype=float).copy()
+        self.misses = 0
+        self.length += 1
 
     def velocity_error(self) -> float:
         """Return the standard error (m/s) of the fitted velocity per axis, from the residuals.
@@ -198,12 +229,7 @@ class TrackCoasting:
         kept: List[Track] = []
         for t, e in pairs:
             track = self.tracks[t]
-            track.steps.append(int(step))
-            track.positions.append(positions[e].copy())
-            del track.steps[:-phd.coast_history], track.positions[:-phd.coast_history]
-            track.velocity = np.asarray(estimates[e].velocity, dtype=float).copy()
-            track.misses = 0
-            track.length += 1
+            track.add(step, positions[e], estimates[e].velocity, phd.coast_history)
             fresh -= followed_long_enough(track, self.params)
             kept.append(track)
         coasted = []
@@ -221,7 +247,8 @@ class TrackCoasting:
             if e not in matched_estimates:
                 kept.append(Track([int(step)], [positions[e].copy()],
                                   np.asarray(estimates[e].velocity, dtype=float).copy(),
-                                  bounds=self._bounds()))
+                                  bounds=self._bounds(),
+                                  unfolds=self.params.phd.coast_boundary == 'bounce'))
         self.tracks = kept
         expected = [track.predict(step + 1) for track in kept if track.steps[-1] < step]
         return CoastingStep(np.array(coasted).reshape(-1, 2), fresh,
@@ -230,7 +257,7 @@ class TrackCoasting:
     def _bounds(self) -> Optional[tuple]:
         """Return the area a new track's fit is folded into, if phd.coast_boundary says so."""
         area = self.params.area
-        return (area.width, area.height) if self.params.phd.coast_boundary == 'reflect' else None
+        return None if self.params.phd.coast_boundary == 'drop' else (area.width, area.height)
 
     def _believed(self, track: Track, position: np.ndarray, step: int,
                   neighbour_targets) -> bool:
