@@ -6,9 +6,9 @@ from scipy import stats
 
 from sat_agent.actions import top_speed
 from sat_agent.agent_core import Agent
-from sat_agent.beyond_paper.track_coasting import Track, TrackCoasting
+from sat_agent.beyond_paper.track_coasting import KAPPA, Track, TrackCoasting
 from sat_agent.beyond_paper.track_revisit import (
-    KAPPA, loss_probability, meeting_step, NoRevisit, TrackRevisit)
+    loss_probability, meeting_step, NoRevisit, TrackRevisit)
 from sat_agent.config import load_params_file
 from sat_agent.state_extraction import TargetEstimate
 from sat_world_sim.inprocess_swarm import InProcessSwarm

@@ -64,6 +64,7 @@ SEARCH_PLANNERS = ('greedy', 'ortools')
 BIRTH_PRIORS = ('uniform', 'undetected')
 SCAN_DETECTIONS = ('square', 'births')
 COAST_BOUNDARIES = ('drop', 'reflect', 'bounce')
+COAST_REPORTS = ('survival', 'ospa')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
 
@@ -238,6 +239,12 @@ class PhdParams:
     coast_survival: float = param(
         0.5, 'additions.track_coasting: a track is reported while p_S^t, t steps after its last '
         'estimate, is at least this', low=0, high=1, low_open=True)
+    # 'ospa' (session 26): the threshold grows with the fit's drift (beyond_paper/coast_report.py).
+    coast_report: str = param(
+        'survival', "additions.track_coasting: when a coasted track is reported: 'survival' "
+        "while p_S^t >= phd.coast_survival, 'ospa' while reporting lowers the expected OSPA: "
+        "p_S^t >= tau / (1 - (1 - tau) E / c^2), tau = phd.coast_survival, E the fit's "
+        'expected squared error cut at cooperation.ospa_cutoff c', choices=COAST_REPORTS)
     coast_min_estimates: int = param(
         3, 'additions.track_coasting: estimates a track needs before it is coasted', low=2,
         high=MANY)

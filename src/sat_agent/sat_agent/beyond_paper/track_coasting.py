@@ -14,11 +14,13 @@ Addition, three parts:
    reported at the position its least-squares constant-velocity fit gives for k, while
    p_S^t >= ``phd.coast_survival`` (t: steps since its last estimate; 1/2 is the paper's
    n_hat = round(mass) rule applied to the one target the track stood for, whose PHD mass out
-   of view decays with p_S). It is dropped sooner on evidence that it is wrong: the coasted
-   position has lain in the agent's square, or in the square a neighbour in range scanned at
-   k - 1, on more than ``phd.coast_misses`` steps without an estimate of it (looked and not
-   found), it leaves the area A, or a neighbour in range reports a target within the gate of
-   it (that neighbour sees it; two reports of one target would count one as false). With
+   of view decays with p_S); with ``phd.coast_report`` 'ospa' the threshold also grows with
+   the fit's drift (beyond_paper/coast_report.py). It is dropped sooner on evidence that it
+   is wrong: the coasted position has lain in the agent's square, or in the square a
+   neighbour in range scanned at k - 1, on more than ``phd.coast_misses`` steps without an
+   estimate of it (looked and not found), it leaves the area A, or a neighbour in range
+   reports a target within the gate of it (that neighbour sees it; two reports of one target
+   would count one as false). With
    ``phd.coast_boundary`` 'reflect' (session 25) the fit is not ended at the border of A but
    folded back into it, as the world's targets bounce (world_model.reflect) and the regrowing
    density keeps undetected targets in A; every use of the fit (the report, the gate, the
@@ -62,9 +64,14 @@ from typing import List, Optional, Sequence
 import numpy as np
 
 from sat_agent.actions import fold, inside_area
+from sat_agent.beyond_paper.coast_report import report_threshold
 from sat_agent.config import SatParams
 from sat_agent.ospa import gated_pairs
 from sat_agent.sensor_model import in_sensing_square
+
+
+# The fit's drift over its own standard error, measured (beyond_paper/track_revisit.py).
+KAPPA = 2.0
 
 
 @dataclass
@@ -159,6 +166,14 @@ class Track:
         offsets = np.asarray(self.steps, dtype=float) - np.mean(self.steps)
         return float(error * np.sqrt(offsets @ offsets / len(self.steps)
                                      + (step - np.mean(self.steps)) ** 2))
+
+    def drift_spread(self, step: int) -> float:
+        """Return the per-axis spread (m) of the fit's drift off the target at step.
+
+        KAPPA times prediction_error: the estimates are the filter's peaks, correlated from
+        step to step, so the residuals understate it (beyond_paper/track_revisit.py).
+        """
+        return KAPPA * self.prediction_error(step)
 
 
 def coast_steps(params: SatParams) -> int:
@@ -263,9 +278,19 @@ class TrackCoasting:
                   neighbour_targets) -> bool:
         """Whether a track without an estimate at step is still reported (module docstring)."""
         neighbours = np.asarray(neighbour_targets, dtype=float).reshape(-1, 2)
-        return (step - track.steps[-1] <= coast_steps(self.params)
+        return (self._alive_enough(track, step)
                 and track.length >= self.params.phd.coast_min_estimates
                 and track.misses <= self.params.phd.coast_misses
                 and inside_area(position, self.params.area)[0]
                 and not (len(neighbours) and np.min(np.hypot(*(neighbours - position).T))
                          <= self.params.phd.coast_gate))
+
+    def _alive_enough(self, track: Track, step: int) -> bool:
+        """Whether p_S^t is high enough to report the track, by phd.coast_report."""
+        params = self.params
+        since = step - track.steps[-1]
+        if params.phd.coast_report == 'survival':
+            return since <= coast_steps(params)
+        threshold = report_threshold(params.phd.coast_survival, track.drift_spread(step),
+                                     params.cooperation.ospa_cutoff)
+        return params.motion.p_survival ** since >= threshold

@@ -13,16 +13,16 @@ fit and still continue the track:
 
     P_lost = exp(-g^2 / (2 (KAPPA s)^2)),  s = Track.prediction_error(arrival step),
 
-the tail of a 2-D Gaussian error of per-axis spread KAPPA s. Once some target's P_lost reaches
-``cooperation.revisit_loss``, the agent's walk holds and it flies to the target with the most
-p_S^t P_lost per metre (t: steps since its last estimate; what the visit saves, a target, per
-distance, as the walks weigh node worth, beyond_paper/persistent_planning.py) among those whose
-meeting point lengthens the way to the walk's next node by at most
-``cooperation.revisit_detour``. It flies on the search move that keeps the fit's next position
-in its next square once it can (investigation.keep_in_view_action). The scan over it continues
-the track (track continuity: the coasted position is an expected target of the extraction), so
-P_lost falls and the walk resumes; a target that is not there is dropped after
-``phd.coast_misses`` looks.
+the tail of a 2-D Gaussian error of per-axis spread KAPPA s (Track.drift_spread). Once some
+target's P_lost reaches ``cooperation.revisit_loss``, the agent's walk holds and it flies to
+the target with the most p_S^t P_lost per metre (t: steps since its last estimate; what the
+visit saves, a target, per distance, as the walks weigh node worth,
+beyond_paper/persistent_planning.py) among those whose meeting point lengthens the way to the
+walk's next node by at most ``cooperation.revisit_detour``. It flies on the search move that
+keeps the fit's next position in its next square once it can
+(investigation.keep_in_view_action). The scan over it continues the track (track continuity:
+the coasted position is an expected target of the extraction), so P_lost falls and the walk
+resumes; a target that is not there is dropped after ``phd.coast_misses`` looks.
 Why: on dev seeds 2001-2020 of the random default (persistent profile of session 21), 893 of
 11,730 target-steps (7.6 %) were of targets followed at least 8 steps and then lost for good
 or for a while: at the loss the fit had drifted 5-10 m off (429 target-steps), it had left
@@ -51,8 +51,6 @@ from sat_agent.beyond_paper.track_coasting import followed_long_enough, Track
 from sat_agent.config import SatParams
 from sat_agent.search_planning import MIN_COST
 
-# Measured drift over the fit's own standard error (module docstring).
-KAPPA = 2.0
 # Rounds of "where is it when I get there": a target walks ~0.6 m per step against the
 # agent's 4, so the second round moves the meeting point by centimetres.
 INTERCEPT_ROUNDS = 2
@@ -77,7 +75,7 @@ def meeting_step(track: Track, pose, step: int, speed: float) -> int:
 
 def loss_probability(track: Track, step: int, gate: float) -> float:
     """Return P_lost at step: the chance the fit errs by more than gate (module docstring)."""
-    spread = KAPPA * track.prediction_error(step)
+    spread = track.drift_spread(step)
     if not np.isfinite(spread):
         return 1.0
     return float(np.exp(-gate ** 2 / (2.0 * max(spread, MIN_COST) ** 2)))
