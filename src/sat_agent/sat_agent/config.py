@@ -239,7 +239,8 @@ class PhdParams:
     coast_survival: float = param(
         0.5, 'additions.track_coasting: a track is reported while p_S^t, t steps after its last '
         'estimate, is at least this', low=0, high=1, low_open=True)
-    # 'ospa' (session 26): the threshold grows with the fit's drift (beyond_paper/coast_report.py).
+    # 'ospa' (beyond_paper/coast_report.py), persistent profile, paired: at random (dev seeds
+    # 4901-5200) OSPA -0.02 m (p 0.028), tracked -0.20 points (p < 0.001); not kept.
     coast_report: str = param(
         'survival', "additions.track_coasting: when a coasted track is reported: 'survival' "
         "while p_S^t >= phd.coast_survival, 'ospa' while reporting lowers the expected OSPA: "
@@ -253,9 +254,10 @@ class PhdParams:
         2, "additions.track_coasting: steps a coasted position may lie in the agent's or a "
         "neighbour's square without an estimate of it before the track is dropped", low=0,
         high=MANY)
-    # Session 25 (fresh dev seeds 4601-4900, paired): 'reflect' tracked +1.70 points (p < 0.001),
-    # OSPA +0.07 m (p 0.08), false-track steps +23: met its rule, off until the reported rows
-    # are remade with it (docs/persistent_trials.md).
+    # Persistent profile, paired (docs/persistent_trials.md): 'reflect' at random (dev seeds
+    # 4601-4900) tracked +1.70 points (p < 0.001), OSPA +0.07 m (p 0.08), but at paper_random
+    # (2001-2200) OSPA +0.08 m (p < 0.001); 'bounce' at random (4901-5200) tracked +0.99,
+    # OSPA +0.15 m (both p < 0.001): folded fits also report dead targets. Not kept.
     coast_boundary: str = param(
         'drop', "additions.track_coasting: a coasted fit that leaves the area: 'drop' ends the "
         "track, 'reflect' folds the walk back into the area as the world's targets bounce, "

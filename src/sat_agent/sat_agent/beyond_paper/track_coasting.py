@@ -9,27 +9,28 @@ Addition, three parts:
 1. Tracks. Each agent keeps a short track of every target it estimated: its estimates of the
    last ``phd.coast_history`` steps, continued from step to step by the nearest estimate
    within ``phd.coast_gate`` of the track's fit (one-to-one, ``ospa.gated_pairs``).
-2. Coasting. A track of at least ``phd.coast_min_estimates`` estimates (fewer give no
-   velocity to trust: a clutter-born track or a glimpse) without an estimate at step k is
-   reported at the position its least-squares constant-velocity fit gives for k, while
-   p_S^t >= ``phd.coast_survival`` (t: steps since its last estimate; 1/2 is the paper's
-   n_hat = round(mass) rule applied to the one target the track stood for, whose PHD mass out
-   of view decays with p_S); with ``phd.coast_report`` 'ospa' the threshold also grows with
-   the fit's drift (beyond_paper/coast_report.py). It is dropped sooner on evidence that it
-   is wrong: the coasted position has lain in the agent's square, or in the square a
-   neighbour in range scanned at k - 1, on more than ``phd.coast_misses`` steps without an
-   estimate of it (looked and not found), it leaves the area A, or a neighbour in range
-   reports a target within the gate of it (that neighbour sees it; two reports of one target
-   would count one as false). With
-   ``phd.coast_boundary`` 'reflect' (session 25) the fit is not ended at the border of A but
-   folded back into it, as the world's targets bounce (world_model.reflect) and the regrowing
-   density keeps undetected targets in A; every use of the fit (the report, the gate, the
-   revisit's goal) then sees the folded walk. 'reflect' folds the fit's prediction only, so
+2. Coasting. A track of at least ``phd.coast_min_estimates`` estimates (fewer give no velocity
+   to trust: a clutter-born track or a glimpse) without an estimate at step k is reported at
+   the position its least-squares constant-velocity fit gives for k, while p_S^t >=
+   ``phd.coast_survival`` (t: steps since its last estimate; 1/2 is the paper's n_hat =
+   round(mass) rule applied to the one target the track stood for, whose PHD mass out of view
+   decays with p_S); with ``phd.coast_report`` 'ospa' the threshold also grows with the fit's
+   drift (beyond_paper/coast_report.py). It is dropped sooner on evidence that it is wrong: the
+   coasted position has lain in the agent's square, or in the square a neighbour in range
+   scanned at k - 1, on more than ``phd.coast_misses`` steps without an estimate of it (looked
+   and not found), it leaves the area A, or a neighbour in range reports a target within the
+   gate of it (that neighbour sees it; two reports of one target would count one as false).
+   With ``phd.coast_boundary`` 'reflect' (session 25) the fit is not ended at the border of A
+   but folded back into it, as the world's targets bounce (world_model.reflect) and the
+   regrowing density keeps undetected targets in A; every use of the fit (the report, the gate,
+   the revisit's goal) then sees the folded walk. 'reflect' folds the fit's prediction only, so
    the estimates of a target after its bounce join a history fitted as one line before it;
    'bounce' (session 26) stores each estimate as its mirror image on the fit's unfolded walk,
-   so the fit stays the straight line the world's target walks (Track.add). Its next
-   position is added to the extraction's expected targets (track continuity), so the target
-   continues at once when it walks back into the square instead of waiting for confirmation.
+   so the fit stays the straight line the world's target walks (Track.add). Neither is in a
+   profile: both also keep reporting dead targets past the border (OSPA +0.08 to +0.15 m,
+   docs/persistent_trials.md, sessions 25-26). A coasted track's next position is added to the
+   extraction's expected targets (track continuity), so the target continues at once when it
+   walks back into the square instead of waiting for confirmation.
 3. Follow, then search. A tracking agent leaves TRACK (as an overlap leaver does, so
    additions.rejoin_cooldown applies, for ``cooperation.follow_cooldown`` steps) once every
    target it estimates has been followed long enough: a track of at least
