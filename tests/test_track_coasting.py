@@ -241,8 +241,8 @@ def test_an_estimate_is_unfolded_to_the_mirror_image_nearest_the_fit():
     track = Track([1, 2, 3], [np.array([50.0, 3.0]), np.array([50.0, 2.0]),
                               np.array([50.0, 1.0])], np.zeros(2), bounds=(100.0, 100.0),
                   unfolds=True)
-    # The line is at y = -1 at step 5 (folded: 1); an estimate at y = 1.4 lies 0.4 m beyond
-    # the folded point, so 0.4 m short of the line's -1 on the unfolded walk.
+    # The line is at y = -1 at step 5 (folded: 1); an estimate at y = 1.4 lies 0.4 m past the
+    # folded point along the bounced walk, so 0.4 m past the line's -1 on the unfolded one.
     track.add(5, np.array([50.2, 1.4]), np.zeros(2), history=50)
     np.testing.assert_allclose(track.positions[-1], (50.2, -1.4))
     # Mirrored at x = 100 and y = 0 at once (two axes, one crossing each).
