@@ -259,7 +259,7 @@ class Agent:
         coasting = self.coasting.update(
             step, pose, estimate.targets, [r.pose for r in reports], np.vstack(
                 [np.zeros((0, 2))] + [r.predicted_positions(self.params.motion.dt)
-                                      for r in reports]))
+                                      for r in reports]), measurements)
         if len(coasting.expected):
             self.extractor.memory = replace(self.extractor.memory, expected=np.vstack(
                 [self.extractor.memory.expected, coasting.expected]))

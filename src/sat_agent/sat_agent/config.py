@@ -65,6 +65,7 @@ BIRTH_PRIORS = ('uniform', 'undetected')
 SCAN_DETECTIONS = ('square', 'births')
 COAST_BOUNDARIES = ('drop', 'reflect', 'bounce')
 COAST_REPORTS = ('survival', 'ospa')
+COAST_FITS = ('estimates', 'measurements')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
 
@@ -263,6 +264,11 @@ class PhdParams:
         "track, 'reflect' folds the walk back into the area as the world's targets bounce, "
         "'bounce' also fits the estimates after a bounce on the unfolded walk",
         choices=COAST_BOUNDARIES)
+    coast_fit: str = param(
+        'estimates', "additions.track_coasting: what a track's constant-velocity walk is fitted "
+        "to: 'estimates' X-hat_k's positions by least squares, 'measurements' the agent's "
+        "measurement of each estimate, weighted by the sensor's covariance "
+        '(beyond_paper/measurement_fit.py)', choices=COAST_FITS)
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,8 @@ import numpy as np
 
 from sat_agent.actions import fold, inside_area
 from sat_agent.beyond_paper.coast_report import report_threshold
+from sat_agent.beyond_paper.measurement_fit import (
+    associate, estimate_position_covariances, measurement_positions, weighted_walk_fit)
 from sat_agent.config import SatParams
 from sat_agent.ospa import gated_pairs
 from sat_agent.sensor_model import in_sensing_square
@@ -73,6 +75,7 @@ from sat_agent.sensor_model import in_sensing_square
 
 # The fit's drift over its own standard error, measured (beyond_paper/track_revisit.py).
 KAPPA = 2.0
+NO_MEASUREMENTS = np.zeros((0, 2))
 
 
 @dataclass
@@ -90,17 +93,28 @@ class Track:
     bounds: Optional[tuple] = None
     # 'bounce': positions hold the estimates on the unfolded walk, so the fit stays one line.
     unfolds: bool = False
+    # phd.coast_fit 'measurements': each position's 2x2 information matrix, and the fit is
+    # the weighted one of beyond_paper/measurement_fit.py.
+    informations: Optional[List[np.ndarray]] = None
 
     def _fit(self):
         """Least-squares constant-velocity fit: (step offsets, mean position, velocity).
 
         Around the mean step the slope and the intercept are uncorrelated.
         """
+        if self.informations is not None:
+            fit = self._weighted_fit()
+            return np.asarray(self.steps, dtype=float) - fit.mean_step, fit.mean, fit.velocity
         steps = np.asarray(self.steps, dtype=float)
         positions = np.asarray(self.positions, dtype=float)
         offsets = steps - steps.mean()
         mean = positions.mean(axis=0)
         return offsets, mean, offsets @ (positions - mean) / (offsets @ offsets)
+
+    def _weighted_fit(self):
+        """Return the generalised least-squares fit of phd.coast_fit 'measurements'."""
+        return weighted_walk_fit(self.steps, np.asarray(self.positions),
+                                 np.asarray(self.informations))
 
     def _line(self, step: int) -> np.ndarray:
         """Evaluate the track's constant-velocity fit at step, before any fold.
@@ -122,22 +136,30 @@ class Track:
             return self._line(step)
         return fold(self._line(step), np.asarray(self.bounds, dtype=float))[0]
 
-    def add(self, step: int, position: np.ndarray, velocity: np.ndarray, history: int):
+    def add(self, step: int, position: np.ndarray, velocity: np.ndarray, history: int,
+            information: Optional[np.ndarray] = None):
         """Continue the track with an estimate at step, keeping its latest history ones.
 
         With ``unfolds`` the estimate is stored as its mirror image on the fit's unfolded walk
         (the image the fold maps to it, nearest the fit's line), so a walk that bounced off a
-        border is still one straight line to fit (module docstring, part 2).
+        border is still one straight line to fit (module docstring, part 2). information: the
+        position's 2x2 information matrix, for a track with informations (mirrored with it).
         """
         position = np.asarray(position, dtype=float)
         if self.unfolds:
             line = self._line(step)
             folded, crossings = fold(line, np.asarray(self.bounds, dtype=float))
             # Each crossing mirrors the axis: near the line the fold is +-1 times a shift.
-            position = line + (position - folded) * (-1.0) ** crossings
+            mirror = (-1.0) ** crossings
+            position = line + (position - folded) * mirror
+            if information is not None:
+                information = information * np.outer(mirror, mirror)
         self.steps.append(int(step))
         self.positions.append(position.copy())
         del self.steps[:-history], self.positions[:-history]
+        if self.informations is not None:
+            self.informations.append(np.asarray(information, dtype=float).copy())
+            del self.informations[:-history]
         self.velocity = np.asarray(velocity, dtype=float).copy()
         self.misses = 0
         self.length += 1
@@ -146,10 +168,13 @@ class Track:
         """Return the standard error (m/s) of the fitted velocity per axis, from the residuals.
 
         Both axes share one noise variance, sum of squared residuals / (2 (n - 2)); inf with
-        fewer than 3 estimates (no residual to judge the fit by).
+        fewer than 3 estimates (no residual to judge the fit by). A weighted fit's is the root
+        mean of its velocity variances (beyond_paper/measurement_fit.py).
         """
         if len(self.steps) < 3:
             return np.inf
+        if self.informations is not None:
+            return float(np.sqrt(np.trace(self._weighted_fit().covariance[2:, 2:]) / 2))
         offsets, mean, velocity = self._fit()
         residuals = np.asarray(self.positions, dtype=float) - mean - np.outer(offsets, velocity)
         variance = (residuals ** 2).sum() / (2 * (len(self.steps) - 2))
@@ -159,8 +184,12 @@ class Track:
         """Return the standard error (m) per axis of the fit's position at step.
 
         The mean position's error sigma / sqrt(n) and the velocity's error times the steps from
-        the mean step, which are uncorrelated (_fit); inf with fewer than 3 estimates.
+        the mean step, which are uncorrelated (_fit); inf with fewer than 3 estimates. A
+        weighted fit's is the root mean of its position variances at step.
         """
+        if self.informations is not None and len(self.steps) >= 3:
+            return float(np.sqrt(np.trace(
+                self._weighted_fit().position_covariance(step)) / 2))
         error = self.velocity_error()
         if not np.isfinite(error):
             return np.inf
@@ -216,7 +245,7 @@ class NoCoasting:
     tracks: tuple = ()
 
     def update(self, step: int, pose, estimates: Sequence, neighbour_poses,
-               neighbour_targets) -> CoastingStep:
+               neighbour_targets, measurements=NO_MEASUREMENTS) -> CoastingStep:
         """Nothing coasted; every estimated target is fresh."""
         return CoastingStep(np.zeros((0, 2)), len(estimates), np.zeros((0, 2)))
 
@@ -229,14 +258,16 @@ class TrackCoasting:
     tracks: List[Track] = field(default_factory=list)
 
     def update(self, step: int, pose, estimates: Sequence, neighbour_poses,
-               neighbour_targets) -> CoastingStep:
+               neighbour_targets, measurements=NO_MEASUREMENTS) -> CoastingStep:
         """Continue the tracks with X-hat_k (TargetEstimates) and coast the others.
 
         neighbour_poses: (i, 2) where the neighbours in range scanned at k - 1;
-        neighbour_targets: (j, 2) the targets they report, predicted to k.
+        neighbour_targets: (j, 2) the targets they report, predicted to k; measurements: the
+        agent's Z_k (range, bearing rows), which phd.coast_fit 'measurements' fits on.
         """
         phd = self.params.phd
         positions = np.array([t.position for t in estimates], dtype=float).reshape(-1, 2)
+        entries, informations = self._entries(pose, estimates, positions, measurements)
         predicted = np.array([track.predict(step) for track in self.tracks]).reshape(-1, 2)
         pairs = list(zip(*gated_pairs(predicted, positions, phd.coast_gate)))
         fresh = len(estimates)
@@ -245,7 +276,8 @@ class TrackCoasting:
         kept: List[Track] = []
         for t, e in pairs:
             track = self.tracks[t]
-            track.add(step, positions[e], estimates[e].velocity, phd.coast_history)
+            track.add(step, entries[e], estimates[e].velocity, phd.coast_history,
+                      None if informations is None else informations[e])
             fresh -= followed_long_enough(track, self.params)
             kept.append(track)
         coasted = []
@@ -261,14 +293,37 @@ class TrackCoasting:
         matched_estimates = {e for _, e in pairs}
         for e in range(len(estimates)):
             if e not in matched_estimates:
-                kept.append(Track([int(step)], [positions[e].copy()],
+                kept.append(Track([int(step)], [entries[e].copy()],
                                   np.asarray(estimates[e].velocity, dtype=float).copy(),
                                   bounds=self._bounds(),
-                                  unfolds=self.params.phd.coast_boundary == 'bounce'))
+                                  unfolds=self.params.phd.coast_boundary == 'bounce',
+                                  informations=None if informations is None
+                                  else [informations[e]]))
         self.tracks = kept
         expected = [track.predict(step + 1) for track in kept if track.steps[-1] < step]
         return CoastingStep(np.array(coasted).reshape(-1, 2), fresh,
                             np.array(expected).reshape(-1, 2))
+
+    def _entries(self, pose, estimates: Sequence, positions: np.ndarray, measurements):
+        """Return what each estimate adds to its track: (E, 2) positions, information or None.
+
+        'estimates' (phd.coast_fit): the estimates, unweighted. 'measurements': the estimate's
+        associated measurement where there is one, else the estimate, and their (E, 2, 2)
+        information matrices (beyond_paper/measurement_fit.py).
+        """
+        params = self.params
+        if params.phd.coast_fit == 'estimates':
+            return positions, None
+        covariances = estimate_position_covariances(
+            [t.covariance for t in estimates], params.sensor.likelihood_bandwidth)
+        scanned, scanned_informations = measurement_positions(measurements, pose,
+                                                              params.sensor)
+        matched = associate(positions, covariances, scanned, scanned_informations)
+        entries, informations = positions.copy(), np.linalg.inv(covariances)
+        found = matched >= 0
+        entries[found] = scanned[matched[found]]
+        informations[found] = scanned_informations[matched[found]]
+        return entries, informations
 
     def _bounds(self) -> Optional[tuple]:
         """Return the area a new track's fit is folded into, if phd.coast_boundary says so."""
