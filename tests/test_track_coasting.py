@@ -13,8 +13,9 @@ from sat_agent.mode_machine import Mode
 from sat_agent.sensor_model import measure
 from sat_agent.state_extraction import TargetEstimate
 
+# The fit of the estimates (the fit of measurements: tests/test_measurement_fit.py).
 PARAMS = load_params_file('config/persistent.yaml').with_overrides(
-    {'additions.track_coasting': True})
+    {'additions.track_coasting': True, 'additions.measurement_fit': False})
 FAR = np.array([90.0, 90.0])           # an agent pose whose square sees none of the targets
 VELOCITY = np.array([0.6, -0.3])
 NONE = np.zeros((0, 2))

@@ -65,7 +65,6 @@ BIRTH_PRIORS = ('uniform', 'undetected')
 SCAN_DETECTIONS = ('square', 'births')
 COAST_BOUNDARIES = ('drop', 'reflect', 'bounce')
 COAST_REPORTS = ('survival', 'ospa')
-COAST_FITS = ('estimates', 'measurements')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
 
@@ -264,11 +263,6 @@ class PhdParams:
         "track, 'reflect' folds the walk back into the area as the world's targets bounce, "
         "'bounce' also fits the estimates after a bounce on the unfolded walk",
         choices=COAST_BOUNDARIES)
-    coast_fit: str = param(
-        'estimates', "additions.track_coasting: what a track's constant-velocity walk is fitted "
-        "to: 'estimates' X-hat_k's positions by least squares, 'measurements' the agent's "
-        "measurement of each estimate, weighted by the sensor's covariance "
-        '(beyond_paper/measurement_fit.py)', choices=COAST_FITS)
 
 
 @dataclass(frozen=True)
@@ -415,7 +409,7 @@ class AdditionsParams:
     """Switches of the additions to the paper (module docstring; one module each in beyond_paper/).
 
     True is config/paper.yaml (our detection chain), False is the paper as written
-    (config/paper_strict.yaml); the persistent search-and-track additions (the last nine) are
+    (config/paper_strict.yaml); the persistent search-and-track additions (the last ten) are
     False in both, and config/persistent.yaml switches on all of them but search_while_tracking.
     Each switch is the only way to turn its addition off.
     """
@@ -496,6 +490,10 @@ class AdditionsParams:
         'left to its coasting once the fit may have drifted beyond phd.coast_gate with '
         'probability cooperation.revisit_loss, instead of meeting it again by chance '
         '(beyond_paper/track_revisit.py)')
+    measurement_fit: bool = param(
+        False, "with additions.track_coasting, a track's constant-velocity walk is fitted to "
+        "the agent's measurement of each estimate, weighted by the sensor's covariance, "
+        'instead of to the estimates by least squares (beyond_paper/measurement_fit.py)')
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Additions to the paper: one module per addition, each switched by one bool of ``additions``.
 
-The default profile (config/paper.yaml) switches every addition on but the nine of persistent
+The default profile (config/paper.yaml) switches every addition on but the ten of persistent
 search-and-track, which config/persistent.yaml switches on (search_while_tracking aside);
 config/paper_strict.yaml switches every one off and so runs the paper as written. Each module's
 docstring says what the paper says, what the addition does, why, and its switch; the paper's
@@ -27,5 +27,7 @@ Module (and switch ``additions.<module>``): the paper's implementation it replac
 - kernel_likelihood: the sensor's own g, bandwidth 0 (phd_filter, tracking_control);
 - heavy_peak_confirmation: the streak alone (confirmation.ScanConfirmation);
 - track_probation: the timeout alone, mode_machine.NoProbation (mode_machine);
-- track_revisit: a coasted target met again by chance, track_revisit.NoRevisit (agent_core).
+- track_revisit: a coasted target met again by chance, track_revisit.NoRevisit (agent_core);
+- measurement_fit: the estimates' least-squares fit, a Track without informations
+  (track_coasting).
 """

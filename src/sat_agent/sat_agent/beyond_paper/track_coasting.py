@@ -8,7 +8,10 @@ Addition, three parts:
 
 1. Tracks. Each agent keeps a short track of every target it estimated: its estimates of the
    last ``phd.coast_history`` steps, continued from step to step by the nearest estimate
-   within ``phd.coast_gate`` of the track's fit (one-to-one, ``ospa.gated_pairs``).
+   within ``phd.coast_gate`` of the track's fit (one-to-one, ``ospa.gated_pairs``). With
+   ``additions.measurement_fit`` (session 27) a track stores the agent's measurement of each
+   estimate instead, with the sensor's information matrix, and its fit is weighted by them
+   (beyond_paper/measurement_fit.py).
 2. Coasting. A track of at least ``phd.coast_min_estimates`` estimates (fewer give no velocity
    to trust: a clutter-born track or a glimpse) without an estimate at step k is reported at
    the position its least-squares constant-velocity fit gives for k, while p_S^t >=
@@ -67,7 +70,8 @@ import numpy as np
 from sat_agent.actions import fold, inside_area
 from sat_agent.beyond_paper.coast_report import report_threshold
 from sat_agent.beyond_paper.measurement_fit import (
-    associate, estimate_position_covariances, measurement_positions, weighted_walk_fit)
+    associate, estimate_position_covariances, measurement_positions, WalkFit,
+    weighted_walk_fit)
 from sat_agent.config import SatParams
 from sat_agent.ospa import gated_pairs
 from sat_agent.sensor_model import in_sensing_square
@@ -93,9 +97,12 @@ class Track:
     bounds: Optional[tuple] = None
     # 'bounce': positions hold the estimates on the unfolded walk, so the fit stays one line.
     unfolds: bool = False
-    # phd.coast_fit 'measurements': each position's 2x2 information matrix, and the fit is
-    # the weighted one of beyond_paper/measurement_fit.py.
+    # additions.measurement_fit: each position's 2x2 information matrix, and the fit is the
+    # weighted one of beyond_paper/measurement_fit.py.
     informations: Optional[List[np.ndarray]] = None
+    # The weighted fit of the entries as they are (add clears it): every use of a track at a
+    # step reads the same fit.
+    _weighted: Optional[WalkFit] = field(default=None, repr=False, compare=False)
 
     def _fit(self):
         """Least-squares constant-velocity fit: (step offsets, mean position, velocity).
@@ -112,9 +119,11 @@ class Track:
         return offsets, mean, offsets @ (positions - mean) / (offsets @ offsets)
 
     def _weighted_fit(self):
-        """Return the generalised least-squares fit of phd.coast_fit 'measurements'."""
-        return weighted_walk_fit(self.steps, np.asarray(self.positions),
-                                 np.asarray(self.informations))
+        """Return the generalised least-squares fit of additions.measurement_fit."""
+        if self._weighted is None:
+            self._weighted = weighted_walk_fit(self.steps, np.asarray(self.positions),
+                                               np.asarray(self.informations))
+        return self._weighted
 
     def _line(self, step: int) -> np.ndarray:
         """Evaluate the track's constant-velocity fit at step, before any fold.
@@ -160,6 +169,7 @@ class Track:
         if self.informations is not None:
             self.informations.append(np.asarray(information, dtype=float).copy())
             del self.informations[:-history]
+            self._weighted = None
         self.velocity = np.asarray(velocity, dtype=float).copy()
         self.misses = 0
         self.length += 1
@@ -263,7 +273,7 @@ class TrackCoasting:
 
         neighbour_poses: (i, 2) where the neighbours in range scanned at k - 1;
         neighbour_targets: (j, 2) the targets they report, predicted to k; measurements: the
-        agent's Z_k (range, bearing rows), which phd.coast_fit 'measurements' fits on.
+        agent's Z_k (range, bearing rows), which additions.measurement_fit fits on.
         """
         phd = self.params.phd
         positions = np.array([t.position for t in estimates], dtype=float).reshape(-1, 2)
@@ -307,12 +317,12 @@ class TrackCoasting:
     def _entries(self, pose, estimates: Sequence, positions: np.ndarray, measurements):
         """Return what each estimate adds to its track: (E, 2) positions, information or None.
 
-        'estimates' (phd.coast_fit): the estimates, unweighted. 'measurements': the estimate's
-        associated measurement where there is one, else the estimate, and their (E, 2, 2)
-        information matrices (beyond_paper/measurement_fit.py).
+        The estimates, unweighted; with additions.measurement_fit the estimate's associated
+        measurement where there is one, else the estimate, and their (E, 2, 2) information
+        matrices (beyond_paper/measurement_fit.py).
         """
         params = self.params
-        if params.phd.coast_fit == 'estimates':
+        if not params.additions.measurement_fit:
             return positions, None
         covariances = estimate_position_covariances(
             [t.covariance for t in estimates], params.sensor.likelihood_bandwidth)
