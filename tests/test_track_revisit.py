@@ -6,9 +6,9 @@ from scipy import stats
 
 from sat_agent.actions import top_speed
 from sat_agent.agent_core import Agent
-from sat_agent.beyond_paper.track_coasting import KAPPA, Track, TrackCoasting
+from sat_agent.beyond_paper.track_coasting import coast_steps, KAPPA, Track, TrackCoasting
 from sat_agent.beyond_paper.track_revisit import (
-    loss_probability, meeting_step, NoRevisit, TrackRevisit)
+    due_loss, EXPIRY_SLACK, loss_probability, meeting_step, NoRevisit, TrackRevisit)
 from sat_agent.config import load_params_file
 from sat_agent.state_extraction import TargetEstimate
 from sat_world_sim.inprocess_swarm import InProcessSwarm
@@ -95,8 +95,10 @@ def test_a_coasted_target_is_revisited_once_its_loss_reaches_the_threshold():
             break
         wanted = revisit.revisit(step, pose, coasting.tracks, pose)
         arrival = meeting_step(track, pose, step, top_speed(PARAMS.actions))
-        lost = loss_probability(track, arrival, gate)
+        lost = due_loss(track, arrival, PARAMS)
         assert (wanted is not None) == (lost >= PARAMS.cooperation.revisit_loss), step
+        if 0.0 < lost < 1.0:       # neither too late nor at the report's end: the drift
+            assert lost == loss_probability(track, arrival, gate)
         if wanted is not None:
             np.testing.assert_allclose(wanted.goal, track.predict(arrival))
             np.testing.assert_allclose(wanted.keep, [track.predict(step + 1)])
@@ -108,9 +110,31 @@ def test_a_coasted_target_is_revisited_once_its_loss_reaches_the_threshold():
     assert NoRevisit().revisit(200, pose, coasting.tracks, pose) is None
 
 
+def test_a_fit_that_does_not_drift_is_revisited_before_its_report_ends():
+    """A coasted report ends at p_S^t < phd.coast_survival, however good the fit.
+
+    An exact fit never drifts: it is due only when its report ends within EXPIRY_SLACK steps
+    of the meeting step, and not once it ended before (nothing left to keep).
+    """
+    track = Track(list(range(1, 21)), [_walk(k) for k in range(1, 21)], VELOCITY.copy(),
+                  length=20)
+    last = 20 + coast_steps(PARAMS)
+    revisit, speed = TrackRevisit(PARAMS), top_speed(PARAMS.actions)
+    due = set()
+    for step in range(21, last + 1):
+        arrival = meeting_step(track, FAR, step, speed)
+        assert loss_probability(track, arrival, PARAMS.phd.coast_gate) < 1e-6
+        wanted = revisit.revisit(step, FAR, [track], FAR)
+        assert (wanted is not None) == (last - EXPIRY_SLACK < arrival <= last + EXPIRY_SLACK)
+        if wanted is not None:
+            due.add(step)
+            np.testing.assert_allclose(wanted.goal, track.predict(arrival))
+    assert due and max(due) < last
+
+
 def test_of_two_due_targets_the_nearer_is_revisited_first():
     a, b = _followed(seed=1).tracks[0], _followed(seed=1, start=(60.0, 60.0)).tracks[0]
-    step = 150
+    step = 60
     pose = (a.predict(step) + b.predict(step)) / 2 + np.array([-10.0, 0.0])   # nearer to a
     wanted = TrackRevisit(PARAMS).revisit(step, pose, [b, a], pose)
     arrival = meeting_step(a, pose, step, top_speed(PARAMS.actions))
@@ -118,7 +142,7 @@ def test_of_two_due_targets_the_nearer_is_revisited_first():
 
 
 def test_a_revisit_off_the_way_is_left_when_the_detour_is_bounded():
-    track, step = _followed().tracks[0], 150
+    track, step = _followed().tracks[0], 60
     spot = track.predict(meeting_step(track, FAR, step, top_speed(PARAMS.actions)))
     bounded = TrackRevisit(PARAMS.with_overrides({'cooperation.revisit_detour': 10.0}))
     # The walk's next node beyond the target, on the line from the pose: no detour.
