@@ -6,19 +6,19 @@ from scipy import stats
 
 from sat_agent.actions import top_speed
 from sat_agent.agent_core import Agent
-from sat_agent.beyond_paper.track_coasting import coast_steps, KAPPA, Track, TrackCoasting
+from sat_agent.beyond_paper.track_coasting import KAPPA, Track, TrackCoasting
 from sat_agent.beyond_paper.track_revisit import (
-    due_loss, EXPIRY_SLACK, loss_probability, meeting_step, NoRevisit, TrackRevisit)
+    loss_probability, meeting_step, NoRevisit, TrackRevisit)
 from sat_agent.config import load_params_file
 from sat_agent.state_extraction import TargetEstimate
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.scenario import scenario_from_mapping
 
-PROFILE = load_params_file('config/persistent.yaml').with_overrides(
-    {'additions.track_revisit': True})
-# The hand-made tracks below hold estimates, not measurements: the fit of the estimates.
-PARAMS = PROFILE.with_overrides({'additions.measurement_fit': False})
+# The fit of the estimates: the hand-made tracks below hold estimates, not measurements, and
+# the lone agent's test says why its fit is the estimates' too.
+PARAMS = load_params_file('config/persistent.yaml').with_overrides(
+    {'additions.track_revisit': True, 'additions.measurement_fit': False})
 VELOCITY = np.array([0.6, -0.3])
 NONE = np.zeros((0, 2))
 FAR = np.array([95.0, 95.0])
@@ -95,10 +95,8 @@ def test_a_coasted_target_is_revisited_once_its_loss_reaches_the_threshold():
             break
         wanted = revisit.revisit(step, pose, coasting.tracks, pose)
         arrival = meeting_step(track, pose, step, top_speed(PARAMS.actions))
-        lost = due_loss(track, arrival, PARAMS)
+        lost = loss_probability(track, arrival, gate)
         assert (wanted is not None) == (lost >= PARAMS.cooperation.revisit_loss), step
-        if 0.0 < lost < 1.0:       # neither too late nor at the report's end: the drift
-            assert lost == loss_probability(track, arrival, gate)
         if wanted is not None:
             np.testing.assert_allclose(wanted.goal, track.predict(arrival))
             np.testing.assert_allclose(wanted.keep, [track.predict(step + 1)])
@@ -110,31 +108,9 @@ def test_a_coasted_target_is_revisited_once_its_loss_reaches_the_threshold():
     assert NoRevisit().revisit(200, pose, coasting.tracks, pose) is None
 
 
-def test_a_fit_that_does_not_drift_is_revisited_before_its_report_ends():
-    """A coasted report ends at p_S^t < phd.coast_survival, however good the fit.
-
-    An exact fit never drifts: it is due only when its report ends within EXPIRY_SLACK steps
-    of the meeting step, and not once it ended before (nothing left to keep).
-    """
-    track = Track(list(range(1, 21)), [_walk(k) for k in range(1, 21)], VELOCITY.copy(),
-                  length=20)
-    last = 20 + coast_steps(PARAMS)
-    revisit, speed = TrackRevisit(PARAMS), top_speed(PARAMS.actions)
-    due = set()
-    for step in range(21, last + 1):
-        arrival = meeting_step(track, FAR, step, speed)
-        assert loss_probability(track, arrival, PARAMS.phd.coast_gate) < 1e-6
-        wanted = revisit.revisit(step, FAR, [track], FAR)
-        assert (wanted is not None) == (last - EXPIRY_SLACK < arrival <= last + EXPIRY_SLACK)
-        if wanted is not None:
-            due.add(step)
-            np.testing.assert_allclose(wanted.goal, track.predict(arrival))
-    assert due and max(due) < last
-
-
 def test_of_two_due_targets_the_nearer_is_revisited_first():
     a, b = _followed(seed=1).tracks[0], _followed(seed=1, start=(60.0, 60.0)).tracks[0]
-    step = 60
+    step = 150
     pose = (a.predict(step) + b.predict(step)) / 2 + np.array([-10.0, 0.0])   # nearer to a
     wanted = TrackRevisit(PARAMS).revisit(step, pose, [b, a], pose)
     arrival = meeting_step(a, pose, step, top_speed(PARAMS.actions))
@@ -142,7 +118,7 @@ def test_of_two_due_targets_the_nearer_is_revisited_first():
 
 
 def test_a_revisit_off_the_way_is_left_when_the_detour_is_bounded():
-    track, step = _followed().tracks[0], 60
+    track, step = _followed().tracks[0], 150
     spot = track.predict(meeting_step(track, FAR, step, top_speed(PARAMS.actions)))
     bounded = TrackRevisit(PARAMS.with_overrides({'cooperation.revisit_detour': 10.0}))
     # The walk's next node beyond the target, on the line from the pose: no detour.
@@ -170,8 +146,8 @@ def _tracked_share_of_a_lone_agent(revisit: bool, seed: int, steps: int = 200) -
         'seed': seed, 'steps': steps, 'agents': [{'id': 1, 'start': [30.0, 30.0]}],
         'targets': [{'id': 1, 'born': 1, 'died': steps, 'start': [31.0, 31.0],
                      'end': [90.0, 70.0]}]})
-    params = PROFILE.with_overrides({'additions.track_revisit': revisit,
-                                     'sensor.clutter_rate': 0.0})
+    params = PARAMS.with_overrides({'additions.track_revisit': revisit,
+                                    'sensor.clutter_rate': 0.0})
     swarm = InProcessSwarm(scenario, params)
     records = [swarm.step() for _ in range(steps)]
     return compute_metrics(records, 'lone', seed)['summary']['tracked_share']
@@ -183,6 +159,10 @@ def test_a_lone_agent_comes_back_over_the_target_it_left_and_keeps_it():
     Without revisits the fit drifts off within ~50 steps and the target is lost until a
     square happens to pass over it again; with them it is reported most of the run. Over
     three seeds: a fit can be wrong from the start, and a revisit then finds nothing.
+    The fit of the estimates: a fit of measurements (additions.measurement_fit) stays on the
+    target, so no revisit comes before its report ends at p_S^t < phd.coast_survival and the
+    lone agent keeps the target 67 % of the run; a revisit at the report's end did not move
+    the swarm's figures (docs/persistent_trials.md, session 28) and was not kept.
     """
     on = np.mean([_tracked_share_of_a_lone_agent(True, seed) for seed in (4, 5, 6)])
     off = np.mean([_tracked_share_of_a_lone_agent(False, seed) for seed in (4, 5, 6)])

@@ -235,16 +235,6 @@ def followed_long_enough(track: Track, params: SatParams) -> bool:
         or track.velocity_error() <= cooperation.follow_velocity_error)
 
 
-def reported(track: Track, step: int, params: SatParams) -> bool:
-    """Whether p_S^t is high enough to report the track at step, by phd.coast_report."""
-    since = step - track.steps[-1]
-    if params.phd.coast_report == 'survival':
-        return since <= coast_steps(params)
-    threshold = report_threshold(params.phd.coast_survival, track.drift_spread(step),
-                                 params.cooperation.ospa_cutoff)
-    return params.motion.p_survival ** since >= threshold
-
-
 @dataclass(frozen=True)
 class CoastingStep:
     """What the tracks give at step k.
@@ -354,9 +344,19 @@ class TrackCoasting:
                   neighbour_targets) -> bool:
         """Whether a track without an estimate at step is still reported (module docstring)."""
         neighbours = np.asarray(neighbour_targets, dtype=float).reshape(-1, 2)
-        return (reported(track, step, self.params)
+        return (self._alive_enough(track, step)
                 and track.length >= self.params.phd.coast_min_estimates
                 and track.misses <= self.params.phd.coast_misses
                 and inside_area(position, self.params.area)[0]
                 and not (len(neighbours) and np.min(np.hypot(*(neighbours - position).T))
                          <= self.params.phd.coast_gate))
+
+    def _alive_enough(self, track: Track, step: int) -> bool:
+        """Whether p_S^t is high enough to report the track, by phd.coast_report."""
+        params = self.params
+        since = step - track.steps[-1]
+        if params.phd.coast_report == 'survival':
+            return since <= coast_steps(params)
+        threshold = report_threshold(params.phd.coast_survival, track.drift_spread(step),
+                                     params.cooperation.ospa_cutoff)
+        return params.motion.p_survival ** since >= threshold

@@ -13,12 +13,7 @@ fit and still continue the track:
 
     P_lost = exp(-g^2 / (2 (KAPPA s)^2)),  s = Track.prediction_error(arrival step),
 
-the tail of a 2-D Gaussian error of per-axis spread KAPPA s (Track.drift_spread). A coasted
-target is also lost when its report ends (track_coasting.reported: p_S^t below
-``phd.coast_survival``) with the fit still on it, as a fit of measurements
-(additions.measurement_fit) often is: when the report ends within EXPIRY_SLACK steps of the
-arrival step, either side, P_lost is 1 (session 28); when it ended before that, the visit
-saves nothing and P_lost is 0 (due_loss). Once some
+the tail of a 2-D Gaussian error of per-axis spread KAPPA s (Track.drift_spread). Once some
 target's P_lost reaches ``cooperation.revisit_loss``, the agent's walk holds and it flies to
 the target with the most p_S^t P_lost per metre (t: steps since its last estimate; what the
 visit saves, a target, per distance, as the walks weigh node worth,
@@ -52,17 +47,13 @@ from typing import Optional, Sequence
 import numpy as np
 
 from sat_agent.actions import top_speed
-from sat_agent.beyond_paper.track_coasting import followed_long_enough, reported, Track
+from sat_agent.beyond_paper.track_coasting import followed_long_enough, Track
 from sat_agent.config import SatParams
 from sat_agent.search_planning import MIN_COST
 
 # Rounds of "where is it when I get there": a target walks ~0.6 m per step against the
 # agent's 4, so the second round moves the meeting point by centimetres.
 INTERCEPT_ROUNDS = 2
-# Steps either side of a coasted report's end within which its revisit is due: the meeting
-# step is a straight flight at top speed, the agent flies the lattice's moves and sees the
-# target once it is in its square, a step or two off that estimate (session 28).
-EXPIRY_SLACK = 3
 
 
 @dataclass(frozen=True)
@@ -90,20 +81,6 @@ def loss_probability(track: Track, step: int, gate: float) -> float:
     return float(np.exp(-gate ** 2 / (2.0 * max(spread, MIN_COST) ** 2)))
 
 
-def due_loss(track: Track, arrival: int, params: SatParams) -> float:
-    """Return what a visit at the arrival step saves of the track, as a chance of losing it.
-
-    1 when its report ends within EXPIRY_SLACK steps of the arrival step, either side (lost
-    for sure unless refreshed, session 28); 0 when it ended before that (nothing left to
-    save); else P_lost.
-    """
-    if not reported(track, arrival - EXPIRY_SLACK, params):
-        return 0.0
-    if not reported(track, arrival + EXPIRY_SLACK, params):
-        return 1.0
-    return loss_probability(track, arrival, params.phd.coast_gate)
-
-
 class NoRevisit:
     """Without the addition a coasted target is seen again only when a square passes over it."""
 
@@ -129,14 +106,14 @@ class TrackRevisit:
         pose = np.asarray(pose, dtype=float).reshape(2)
         walk_goal = np.asarray(walk_goal, dtype=float).reshape(2)
         direct = np.hypot(*(walk_goal - pose))
-        speed = top_speed(params.actions)
+        speed, gate = top_speed(params.actions), params.phd.coast_gate
         best, best_rate = None, 0.0
         # A handful of tracks per agent: this loop is over targets, not particles.
         for track in tracks:
             if track.steps[-1] >= step or not followed_long_enough(track, params):
                 continue
             arrival = meeting_step(track, pose, step, speed)
-            lost = due_loss(track, arrival, params)
+            lost = loss_probability(track, arrival, gate)
             if lost < params.cooperation.revisit_loss:
                 continue
             goal = track.predict(arrival)
