@@ -38,7 +38,8 @@ dev seeds 5201-5500 of the random default (300, paired with config/persistent.ya
 tracked +1.90 points (95 % CI [+0.65, +3.18], Wilcoxon p 0.003), OSPA -0.17 m ([-0.26, -0.08],
 p < 0.001), detected +1.99 ([-0.32, +4.20], p 0.09), area searched by k = 100 +0.68 (p <
 0.001); at paper_random (dev seeds 2001-2200) detected +0.75, tracked +0.21, OSPA +0.05 m, none
-significant. On in config/persistent.yaml since.
+significant. On in config/persistent.yaml since; on the reported seeds, paired with the rows
+before it, no move is significant (seeds 1-50 tracked +2.5, held out -0.8; README, issue 15).
 Switch: ``additions.measurement_fit`` (off: track_coasting's fit of the estimates).
 """
 
