@@ -9,6 +9,8 @@ from sat_agent.beyond_paper.track_coasting import Track, TrackCoasting
 from sat_agent.config import load_params_file
 from sat_agent.sensor_model import measure, measurement_sigmas
 from sat_agent.state_extraction import TargetEstimate
+from sat_world_sim.inprocess_swarm import InProcessSwarm
+from sat_world_sim.scenario import scenario_from_mapping
 
 PARAMS = load_params_file('config/persistent.yaml')
 SENSOR = PARAMS.sensor
@@ -143,3 +145,22 @@ def test_a_mirrored_entry_mirrors_its_information():
     track.add(5, np.array([50.2, 1.4]), np.zeros(2), history=50, information=information)
     # Mirrored in y: the x-y coupling changes sign.
     np.testing.assert_allclose(track.informations[-1], [[4.0, -1.0], [-1.0, 2.0]])
+
+
+def test_an_agent_fits_its_tracks_on_the_scans_the_world_gave_it():
+    """Agent.step hands its scan to the coasting: a swarm-built track holds measurements.
+
+    A measurement's information is the sensor's, ~1 m along the line of sight and centimetres
+    across it; an estimate's is near isotropic. No clutter, one target under the lone agent.
+    """
+    scenario = scenario_from_mapping({
+        'seed': 3, 'steps': 12, 'agents': [{'id': 1, 'start': [30.0, 30.0]}],
+        'targets': [{'id': 1, 'born': 1, 'died': 12, 'start': [31.0, 31.0],
+                     'end': [38.0, 36.0]}]})
+    swarm = InProcessSwarm(scenario, PARAMS.with_overrides({'sensor.clutter_rate': 0.0}))
+    for _ in range(12):
+        swarm.step()
+    track = max(swarm.agents[1].coasting.tracks, key=lambda t: t.length)
+    assert track.length >= 8 and len(track.informations) == len(track.steps)
+    spreads = np.array([np.linalg.eigvalsh(w) for w in track.informations])
+    assert np.median(spreads[:, 1] / spreads[:, 0]) > 100.0
