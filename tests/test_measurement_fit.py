@@ -100,6 +100,30 @@ def test_each_estimate_takes_its_nearest_measurement_within_the_gate_one_to_one(
                                   [-1, -1])
 
 
+def test_only_a_measurement_in_the_square_continues_a_track():
+    """A false alarm far out passes any gate by its width; it is not a detection (session 29).
+
+    One estimate in view with its target's measurement, one out of view whose only candidate is
+    a false alarm 90 m away (range sigma ~41 m): its 80 m residual lies inside the 99 % gate of
+    the summed covariances, so only the square keeps it out.
+    """
+    pose = np.array([10.0, 10.0])
+    seen, unseen = np.array([12.0, 11.0]), np.array([20.0, 10.0])
+    scans = np.vstack([measure(seen[None], pose), [[90.0, 0.0]]])
+    far, far_information = measurement_positions(scans[1:], pose, SENSOR)
+    assert associate(unseen[None], np.eye(2)[None], far, far_information)[0] == 0
+    coasting = TrackCoasting(PARAMS)
+    estimates = [TargetEstimate(point + 0.3, VELOCITY, np.eye(4) * 0.25, 1.0)
+                 for point in (seen, unseen)]
+    coasting.update(1, pose, estimates, NONE, NONE, scans)
+    entries = np.array([track.positions[0] for track in coasting.tracks])
+    np.testing.assert_allclose(entries, [seen, unseen + 0.3], atol=1e-9)
+    # The out-of-view entry weighs as its peak does, not as the false alarm would.
+    np.testing.assert_allclose(coasting.tracks[1].informations[0],
+                               np.linalg.inv(estimate_position_covariances(
+                                   [np.eye(4) * 0.25], SENSOR.likelihood_bandwidth)[0]))
+
+
 def test_a_peaks_covariance_holds_its_kernel():
     peak = np.diag([0.5, 9.0, 0.2, 9.0])     # [x, vx, y, vy]
     np.testing.assert_allclose(estimate_position_covariances([peak], 0.3)[0],

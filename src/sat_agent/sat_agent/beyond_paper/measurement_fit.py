@@ -12,7 +12,9 @@ one predicted and corrected), so the fit knows a velocity to 4 cm/s only after ~
 understates its own drift (``Track.drift_spread``'s KAPPA, beyond_paper/track_revisit.py).
 Addition (session 27): each estimate that continues a track
 brings the agent's own measurement of that target at that scan, the one nearest the estimate
-within the 99 % gate of their summed covariances (one-to-one, scipy's assignment), as a
+within the 99 % gate of their summed covariances (one-to-one, scipy's assignment) among those
+in the agent's sensing square (only the square holds detections; until session 29 a false
+alarm from anywhere in the area could pass the gate, its covariance tens of metres wide), as a
 position s + r (cos b, sin b) with the sensor's own information matrix
 
     W = u u^T / sigma_r^2 + n n^T / (r sigma_b)^2,   u = (cos b, sin b), n = (-sin b, cos b),

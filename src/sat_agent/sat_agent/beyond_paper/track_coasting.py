@@ -318,8 +318,8 @@ class TrackCoasting:
         """Return what each estimate adds to its track: (E, 2) positions, information or None.
 
         The estimates, unweighted; with additions.measurement_fit the estimate's associated
-        measurement where there is one, else the estimate, and their (E, 2, 2) information
-        matrices (beyond_paper/measurement_fit.py).
+        measurement in the agent's square where there is one, else the estimate, and their
+        (E, 2, 2) information matrices (beyond_paper/measurement_fit.py).
         """
         params = self.params
         if not params.additions.measurement_fit:
@@ -328,6 +328,10 @@ class TrackCoasting:
             [t.covariance for t in estimates], params.sensor.likelihood_bandwidth)
         scanned, scanned_informations = measurement_positions(measurements, pose,
                                                               params.sensor)
+        # Only the square holds detections (Eqn. sensing_model's p_D); a false alarm far out
+        # has a covariance so wide that it would pass the gate of any estimate (session 29).
+        seen = in_sensing_square(scanned, pose, params.sensor.square_side)
+        scanned, scanned_informations = scanned[seen], scanned_informations[seen]
         matched = associate(positions, covariances, scanned, scanned_informations)
         entries, informations = positions.copy(), np.linalg.inv(covariances)
         found = matched >= 0
