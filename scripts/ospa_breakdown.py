@@ -1,0 +1,86 @@
+#!/usr/bin/env python3
+"""Where the persistent profile's mean OSPA goes: the what-ifs of docs/persistent_trials.md.
+
+For each seed, the profile's cell of make evaluate (study_design: the same truth per seed) runs
+in-process, and sat_world_sim/ospa_breakdown.py scores it again with its swarm estimate changed:
+false estimates removed, matched ones moved onto their targets, the targets it had found and
+lost kept; then its false reports by source (an agent's own estimate, or a coasted track whose
+target died, whose target is elsewhere, or that never had one) with the mean OSPA without each.
+Means over the seeds with 95 % t intervals. A diagnostic: its figures are the profile's on the
+seeds given, never a reported result.
+
+    scripts/with_env.sh python scripts/ospa_breakdown.py [--setting random] [--seeds 40]
+        [--first-seed 6761] [--params config/persistent.yaml] [--jobs 2]
+"""
+
+import argparse
+from multiprocessing import Pool
+from pathlib import Path
+
+import numpy as np
+from scipy import stats
+
+from sat_agent.config import load_params_file
+from sat_world_sim.inprocess_swarm import InProcessSwarm
+from sat_world_sim.ospa_breakdown import false_sources, SOURCES, what_if_ospa, WHAT_IFS
+from sat_world_sim.scenario import load_scenario
+from sat_world_sim.study_design import default_cell, PERSISTENT_LABEL, PERSISTENT_PROFILE
+from sat_world_sim.study_design import scenario_for, SETTINGS
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def one_seed(job) -> tuple:
+    """Return a seed's what-if OSPAs, false report-steps per source and OSPA without each."""
+    setting, params_path, seed = job
+    cell = default_cell(setting, PERSISTENT_LABEL, profile=PERSISTENT_PROFILE)
+    params = cell.params(load_params_file(params_path))
+    scenario = scenario_for(cell, seed, params,
+                            load_scenario(ROOT / 'config' / 'scenarios' / 'paper.yaml'))
+    found = false_sources(InProcessSwarm(scenario, params), scenario.steps)
+    what_ifs = what_if_ospa(found.records)
+    return ([what_ifs[name] for name in WHAT_IFS], [found.counts[s] for s in SOURCES],
+            [found.mean_ospa_without[s] for s in SOURCES])
+
+
+def interval(values) -> str:
+    """Mean and 95 % t interval of per-seed values."""
+    values = np.asarray(values, dtype=float)
+    mean = float(values.mean())
+    if len(values) < 2:
+        return f'{mean:.3f}'
+    half = stats.t.ppf(0.975, len(values) - 1) * stats.sem(values)
+    return f'{mean:.3f} [{mean - half:.3f}, {mean + half:.3f}]'
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--setting', choices=sorted(s for s in SETTINGS if s != 'paper'),
+                        default='random')
+    parser.add_argument('--seeds', type=int, default=40)
+    parser.add_argument('--first-seed', type=int, default=6761)
+    parser.add_argument('--params', default=str(ROOT / 'config' / 'persistent.yaml'))
+    parser.add_argument('--jobs', type=int, default=2)
+    args = parser.parse_args(argv)
+    if args.seeds < 1 or args.jobs < 1:
+        parser.error(f'--seeds {args.seeds}, --jobs {args.jobs}: both must be at least 1')
+    jobs = [(args.setting, args.params, seed)
+            for seed in range(args.first_seed, args.first_seed + args.seeds)]
+    with Pool(args.jobs) as pool:
+        what_ifs, counts, without = (np.array(part, dtype=float)
+                                     for part in zip(*pool.map(one_seed, jobs)))
+    print(f'{args.setting}, seeds {jobs[0][2]}-{jobs[-1][2]}, {args.params}')
+    print('what-if: mean OSPA (m) [95 % t interval], change against reported')
+    for column, name in enumerate(WHAT_IFS):
+        change = what_ifs[:, column] - what_ifs[:, 0]
+        print(f'  {name:26s} {interval(what_ifs[:, column])}  {change.mean():+.3f}')
+    print('false reports (> c from every target): report-steps per run; mean OSPA without them')
+    for column, name in enumerate(SOURCES):
+        change = without[:, column] - what_ifs[:, 0]
+        print(f'  {name:26s} {interval(counts[:, column])}  {interval(without[:, column])}'
+              f'  {change.mean():+.3f}')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
