@@ -45,8 +45,7 @@ def what_if_estimates(truth: np.ndarray, estimate: np.ndarray, detected: np.ndar
     estimate = np.asarray(estimate, dtype=float).reshape(-1, 2)
     gaps = cdist(estimate, truth) if len(truth) and len(estimate) else None
     if gaps is None:
-        kept = estimate[:0] if len(estimate) else estimate
-        localised = kept
+        kept = localised = estimate[:0]
         tracked = np.zeros(len(truth), dtype=bool)
     else:
         kept_rows = gaps.min(axis=1) <= config.cutoff
