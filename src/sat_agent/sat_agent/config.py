@@ -246,6 +246,8 @@ class PhdParams:
         "while p_S^t >= phd.coast_survival, 'ospa' while reporting lowers the expected OSPA: "
         "p_S^t >= tau / (1 - (1 - tau) E / c^2), tau = phd.coast_survival, E the fit's "
         'expected squared error cut at cooperation.ospa_cutoff c', choices=COAST_REPORTS)
+    # 2 with the measurement fit (persistent profile, random, dev seeds 6841-7140, paired):
+    # tracked +0.36 points (p < 0.001), OSPA +0.10 m (p < 0.001), 16 more false-track steps.
     coast_min_estimates: int = param(
         3, 'additions.track_coasting: estimates a track needs before it is coasted', low=2,
         high=MANY)
@@ -367,6 +369,7 @@ class CooperationParams:
     # A fixed count trades: dev seeds at random, paired with 20 alone, 10 alone detected +3.5
     # points and tracked -2.3 (2001-2100) and -3.1 (2201-2400). 8 and 4 cm/s (what 20
     # estimates erring 1 m give) detected as much more without that loss (README, issue 15).
+    # 0.025 m/s (session 31, dev seeds 6841-7140): tracked +0.29 points, n.s.
     follow_steps: int = param(
         8, 'additions.track_coasting: a tracking agent returns to search once every target '
         'in its square has a track of at least this many estimates', low=2, high=MANY)
@@ -377,7 +380,9 @@ class CooperationParams:
     # track again; what the cooldown stops after such an exit is any other target and every
     # look (additions.investigation). 0 with search.look_spots 3 (session 23, persistent
     # profile, random): tracked -0.1 points, detected -1.4 on fresh dev seeds 3401-3700; not
-    # kept (docs/persistent_trials.md).
+    # kept (docs/persistent_trials.md). Session 31 (random, paired): 5 tracked +0.47 points
+    # pooled over dev seeds 6841-7440 (p 0.17); 0 pooled over 7141-7740: tracked +1.09 (p
+    # 0.013), OSPA -0.08 m (p 0.004), false-track steps -4.1 (p 0.001), short of its rule.
     follow_cooldown: int = param(
         10, 'additions.track_coasting: with additions.rejoin_cooldown, a tracker that leaves '
         'TRACK because its targets are followed ignores estimated targets (and looks at '
@@ -385,6 +390,7 @@ class CooperationParams:
     # Dev seeds 2601-2700 at random, paired with the persistent profile: 0.05 / 0.1 / 0.2 gave
     # detected -2.5 / -4.3 / -3.6 points, tracked +0.4 / +0.9 / +0.0; 0.05 on fresh seeds
     # 2701-3000: detected -0.1, tracked +2.2 (p < 0.001), OSPA -0.16 m (README, issue 15).
+    # 0.02 (session 31, dev seeds 6841-7140): tracked +0.37 points, n.s.
     revisit_loss: float = param(
         0.05, 'additions.track_revisit: a searching agent flies back over a coasted target once '
         'the chance that its fit errs by more than phd.coast_gate when the agent gets there '
