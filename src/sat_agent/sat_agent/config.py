@@ -369,10 +369,10 @@ class CooperationParams:
     # A fixed count trades: dev seeds at random, paired with 20 alone, 10 alone detected +3.5
     # points and tracked -2.3 (2001-2100) and -3.1 (2201-2400). 8 and 4 cm/s (what 20
     # estimates erring 1 m give) detected as much more without that loss (README, issue 15).
-    # 0.025 m/s (session 31, dev seeds 6841-7140): tracked +0.29 points, n.s.
     follow_steps: int = param(
         8, 'additions.track_coasting: a tracking agent returns to search once every target '
         'in its square has a track of at least this many estimates', low=2, high=MANY)
+    # 0.025 m/s (session 31, dev seeds 6841-7140): tracked +0.29 points, n.s.
     follow_velocity_error: float = param(
         0.04, "additions.track_coasting: and the standard error of that track's fitted "
         'velocity is at most this (m/s; 0: the count alone)', low=0, high=100)
