@@ -97,10 +97,15 @@ def test_a_track_on_probation_ends_on_its_first_step_without_targets():
 
 
 def test_a_tracker_leaving_followed_targets_has_the_follow_cooldown():
-    machine = tracking_machine()
+    machine = tracking_machine(PARAMS.with_overrides({'cooperation.follow_cooldown': 10}))
     assert machine.update(1, False, followed=True) == Mode.SEARCH and machine.switched
-    assert machine.cooldown_left == PARAMS.cooperation.follow_cooldown == 10
-    none = tracking_machine(PARAMS.with_overrides({'cooperation.follow_cooldown': 0}))
+    assert machine.cooldown_left == 10
+    for _ in range(10):
+        assert machine.update(1, False) == Mode.SEARCH
+    assert machine.update(1, False) == Mode.TRACK
+    # The default (session 32): no cooldown, so the leaver tracks the next target it estimates.
+    none = tracking_machine()
+    assert PARAMS.cooperation.follow_cooldown == 0
     assert none.update(1, False, followed=True) == Mode.SEARCH and none.cooldown_left == 0
     assert none.update(1, False) == Mode.TRACK
     # An overlap exit keeps its own cooldown whatever the follow cooldown is.

@@ -377,14 +377,13 @@ class CooperationParams:
         0.04, "additions.track_coasting: and the standard error of that track's fitted "
         'velocity is at most this (m/s; 0: the count alone)', low=0, high=100)
     # The mode counts the targets not yet followed, so a followed target cannot make the leaver
-    # track again; what the cooldown stops after such an exit is any other target and every
-    # look (additions.investigation). 0 with search.look_spots 3 (session 23, persistent
-    # profile, random): tracked -0.1 points, detected -1.4 on fresh dev seeds 3401-3700; not
-    # kept (docs/persistent_trials.md). Session 31 (random, paired): 5 tracked +0.47 points
-    # pooled over dev seeds 6841-7440 (p 0.17); 0 pooled over 7141-7740: tracked +1.09 (p
-    # 0.013), OSPA -0.08 m (p 0.004), false-track steps -4.1 (p 0.001), short of its rule.
+    # track again; a cooldown after such an exit only stops any other target and every look
+    # (additions.investigation). 0 against 10 (rule 17, persistent profile, random, paired):
+    # over dev seeds 7141-8060 (900) tracked +1.33 points (p 0.001), OSPA -0.10 m (p < 0.001),
+    # false-track steps -3.8, detected +0.15; 5 moved nothing (session 31). The leaver's first
+    # steps then track targets it has not followed itself (docs/persistent_trials.md).
     follow_cooldown: int = param(
-        10, 'additions.track_coasting: with additions.rejoin_cooldown, a tracker that leaves '
+        0, 'additions.track_coasting: with additions.rejoin_cooldown, a tracker that leaves '
         'TRACK because its targets are followed ignores estimated targets (and looks at '
         'nothing) for this many steps', low=0, high=MANY)
     # Dev seeds 2601-2700 at random, paired with the persistent profile: 0.05 / 0.1 / 0.2 gave
