@@ -5,7 +5,9 @@ in the next time-step to search" (Section "Multi-agent Tracking", a); an agent i
 switches to TRACK when it estimates targets.
 Addition: the leaver ignores its estimated targets (stays in SEARCH, looks at nothing) for
 ``cooperation.rejoin_cooldown`` steps; a tracker that leaves because its targets are followed
-(additions.track_coasting) for ``cooperation.follow_cooldown`` steps.
+(additions.track_coasting) for ``cooperation.follow_cooldown`` steps (0 by default since
+session 32: the mode counts only targets not yet followed, so no followed target draws such a
+leaver back, and a cooldown only kept it from other targets; docs/persistent_trials.md, rule 17).
 Why: the leaver still sees the abandoned targets for a few steps while it flies off; re-entering
 TRACK then would undo the overlap resolution, and the two agents would overlap again. The mode
 machine only sees target counts, so the cooldown is on time, not on target identity: 10 steps

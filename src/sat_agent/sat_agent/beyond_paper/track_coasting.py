@@ -35,15 +35,15 @@ Addition, three parts:
    extraction's expected targets (track continuity), so the target continues at once when it
    walks back into the square instead of waiting for confirmation.
 3. Follow, then search. A tracking agent leaves TRACK (as an overlap leaver does, so
-   additions.rejoin_cooldown applies, for ``cooperation.follow_cooldown`` steps) once every
-   target it estimates has been followed long enough: a track of at least
-   ``cooperation.follow_steps`` estimates whose fitted velocity has a standard error of at most
-   ``cooperation.follow_velocity_error`` (0: the count alone). From then on such a target does
-   not make it track again: it is coasted and its track refreshed whenever a square passes
-   over it. The error is judged from the fit's own residuals, so a clean track is left after a
-   few estimates and a noisy one is followed until its velocity is known as well (session 18,
-   dev seeds, README issue 15: against a fixed 20 estimates, the same detection gain as a fixed
-   10 without its loss of tracked target-steps).
+   additions.rejoin_cooldown applies, for ``cooperation.follow_cooldown`` steps: 0 by default
+   since session 32) once every target it estimates has been followed long enough: a track of
+   at least ``cooperation.follow_steps`` estimates whose fitted velocity has a standard error
+   of at most ``cooperation.follow_velocity_error`` (0: the count alone). From then on such a
+   target does not make it track again: it is coasted and its track refreshed whenever a
+   square passes over it. The error is judged from the fit's own residuals, so a clean track
+   is left after a few estimates and a noisy one is followed until its velocity is known as
+   well (session 18, dev seeds, README issue 15: against a fixed 20 estimates, the same
+   detection gain as a fixed 10 without its loss of tracked target-steps).
 
 Coasted targets are reported only (the swarm's estimate, the metrics): the mode counts the
 targets whose tracks are still short, and the tracking control, the overlap test and the
