@@ -63,7 +63,7 @@ SEARCH_POLICIES = ('sat', 'lawnmower', 'random_walk', 'phd_voronoi', 'thompson')
 SEARCH_PLANNERS = ('greedy', 'ortools')
 BIRTH_PRIORS = ('uniform', 'undetected')
 SCAN_DETECTIONS = ('square', 'births')
-COAST_BOUNDARIES = ('drop', 'reflect', 'bounce')
+COAST_BOUNDARIES = ('drop', 'reflect', 'bounce', 'clamp')
 COAST_REPORTS = ('survival', 'ospa')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
@@ -263,8 +263,9 @@ class PhdParams:
     coast_boundary: str = param(
         'drop', "additions.track_coasting: a coasted fit that leaves the area: 'drop' ends the "
         "track, 'reflect' folds the walk back into the area as the world's targets bounce, "
-        "'bounce' also fits the estimates after a bounce on the unfolded walk",
-        choices=COAST_BOUNDARIES)
+        "'bounce' also fits the estimates after a bounce on the unfolded walk, 'clamp' reports "
+        'it at its nearest point of the area while it lies outside by at most its drift '
+        'spread', choices=COAST_BOUNDARIES)
 
 
 @dataclass(frozen=True)
@@ -399,6 +400,12 @@ class CooperationParams:
     revisit_detour: float = param(
         float(MANY), 'additions.track_revisit: and flying over it lengthens the way to the '
         "walk's next node by at most this (m)", low=0, high=MANY)
+    # Session 33: with phd.coast_boundary 'clamp' a target that died at the border is
+    # reported there until its fit leaves by its drift spread (docs/persistent_trials.md).
+    revisit_border: bool = param(
+        False, "additions.track_revisit: with phd.coast_boundary 'clamp', a coasted target "
+        'whose fit has left the area since its last estimate (reported at the border) is due '
+        'for a revisit whatever its drift')
     track_search_tolerance: float = param(
         0.3, 'additions.search_while_tracking: epsilon, the share of the best Renyi divergence '
         '(Eqn. track_control) a tracking agent may give up to cover search worth', low=0,

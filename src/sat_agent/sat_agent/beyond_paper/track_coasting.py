@@ -31,9 +31,14 @@ Addition, three parts:
    'bounce' (session 26) stores each estimate as its mirror image on the fit's unfolded walk,
    so the fit stays the straight line the world's target walks (Track.add). Neither is in a
    profile: both also keep reporting dead targets past the border (OSPA +0.08 to +0.15 m,
-   docs/persistent_trials.md, sessions 25-26). A coasted track's next position is added to the
-   extraction's expected targets (track continuity), so the target continues at once when it
-   walks back into the square instead of waiting for confirmation.
+   docs/persistent_trials.md, sessions 25-26). With 'clamp' (session 33, coast_point) the
+   fit is not folded: while it lies outside A by at most its drift spread it is taken for a
+   target at the border (the world's targets stay in A) and reported at its nearest point of
+   A; farther out the track ends. A live target walking along the border has a fit that
+   leaves A by a fraction of a metre, which 'drop' ends. A coasted track's next position
+   (expected_point) is added to the extraction's expected targets (track continuity), so the
+   target continues at once when it walks back into the square instead of waiting for
+   confirmation.
 3. Follow, then search. A tracking agent leaves TRACK (as an overlap leaver does, so
    additions.rejoin_cooldown applies, for ``cooperation.follow_cooldown`` steps: 0 by default
    since session 32) once every target it estimates has been followed long enough: a track of
@@ -216,6 +221,31 @@ class Track:
         return KAPPA * self.prediction_error(step)
 
 
+def coast_point(track: Track, step: int, params: SatParams) -> Optional[np.ndarray]:
+    """Return where a coasted track stands at step in A, or None once its fit has left A.
+
+    With phd.coast_boundary 'clamp' a fit outside A by at most its drift spread is the target
+    at the border (the world's targets stay in A): its nearest point of A.
+    """
+    point = track.predict(step)
+    area = params.area
+    if inside_area(point, area)[0]:
+        return point
+    if params.phd.coast_boundary != 'clamp':
+        return None
+    clamped = np.clip(point, 0.0, (area.width, area.height))
+    return clamped if np.hypot(*(point - clamped)) <= track.drift_spread(step) else None
+
+
+def expected_point(track: Track, step: int, params: SatParams) -> np.ndarray:
+    """Return where to expect the target at step: coast_point, else the fit's line.
+
+    Past the border the line still gates an estimate at the border (TrackCoasting.update).
+    """
+    point = coast_point(track, step, params)
+    return track.predict(step) if point is None else point
+
+
 def coast_steps(params: SatParams) -> int:
     """Return the largest t with p_S^t >= phd.coast_survival: the longest a track is coasted."""
     survival, threshold = params.motion.p_survival, params.phd.coast_survival
@@ -295,7 +325,9 @@ class TrackCoasting:
         for t in range(len(self.tracks)):
             if t in matched_tracks:
                 continue
-            track, position = self.tracks[t], predicted[t]
+            track, position = self.tracks[t], coast_point(self.tracks[t], step, self.params)
+            if position is None:
+                continue
             track.misses += bool(in_sensing_square(position, looked, side).any())
             if self._believed(track, position, step, neighbour_targets):
                 kept.append(track)
@@ -310,7 +342,8 @@ class TrackCoasting:
                                   informations=None if informations is None
                                   else [informations[e]]))
         self.tracks = kept
-        expected = [track.predict(step + 1) for track in kept if track.steps[-1] < step]
+        expected = [expected_point(track, step + 1, self.params) for track in kept
+                    if track.steps[-1] < step]
         return CoastingStep(np.array(coasted).reshape(-1, 2), fresh,
                             np.array(expected).reshape(-1, 2))
 
@@ -342,7 +375,8 @@ class TrackCoasting:
     def _bounds(self) -> Optional[tuple]:
         """Return the area a new track's fit is folded into, if phd.coast_boundary says so."""
         area = self.params.area
-        return None if self.params.phd.coast_boundary == 'drop' else (area.width, area.height)
+        folds = self.params.phd.coast_boundary in ('reflect', 'bounce')
+        return (area.width, area.height) if folds else None
 
     def _believed(self, track: Track, position: np.ndarray, step: int,
                   neighbour_targets) -> bool:
@@ -351,7 +385,6 @@ class TrackCoasting:
         return (self._alive_enough(track, step)
                 and track.length >= self.params.phd.coast_min_estimates
                 and track.misses <= self.params.phd.coast_misses
-                and inside_area(position, self.params.area)[0]
                 and not (len(neighbours) and np.min(np.hypot(*(neighbours - position).T))
                          <= self.params.phd.coast_gate))
 

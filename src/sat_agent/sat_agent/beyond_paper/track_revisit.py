@@ -13,7 +13,10 @@ fit and still continue the track:
 
     P_lost = exp(-g^2 / (2 (KAPPA s)^2)),  s = Track.prediction_error(arrival step),
 
-the tail of a 2-D Gaussian error of per-axis spread KAPPA s (Track.drift_spread). Once some
+the tail of a 2-D Gaussian error of per-axis spread KAPPA s (Track.drift_spread). With
+``cooperation.revisit_border`` (session 33) a target whose fit has left A since its last
+estimate, reported at the border by phd.coast_boundary 'clamp', counts as lost (P_lost = 1):
+it walks along the border or died there, and one look tells which (due_loss). Once some
 target's P_lost reaches ``cooperation.revisit_loss``, the agent's walk holds and it flies to
 the target with the most p_S^t P_lost per metre (t: steps since its last estimate; what the
 visit saves, a target, per distance, as the walks weigh node worth,
@@ -46,8 +49,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from sat_agent.actions import top_speed
-from sat_agent.beyond_paper.track_coasting import followed_long_enough, Track
+from sat_agent.actions import inside_area, top_speed
+from sat_agent.beyond_paper.track_coasting import expected_point, followed_long_enough, Track
 from sat_agent.config import SatParams
 from sat_agent.search_planning import MIN_COST
 
@@ -81,6 +84,22 @@ def loss_probability(track: Track, step: int, gate: float) -> float:
     return float(np.exp(-gate ** 2 / (2.0 * max(spread, MIN_COST) ** 2)))
 
 
+def due_loss(track: Track, arrival: int, params: SatParams) -> float:
+    """Return what a visit at the arrival step saves of the track, as a chance of losing it.
+
+    With ``cooperation.revisit_border``, 1 when the fit lies outside A at the arrival step
+    (reported at the border, phd.coast_boundary 'clamp') and inside it at the track's last
+    estimate: one look tells a target walking along the border from one that died there;
+    a track refreshed with its fit already outside is not due again. Else P_lost.
+    """
+    if params.cooperation.revisit_border:
+        inside = inside_area(np.array([track.predict(track.steps[-1]), track.predict(arrival)]),
+                             params.area)
+        if inside[0] and not inside[1]:
+            return 1.0
+    return loss_probability(track, arrival, params.phd.coast_gate)
+
+
 class NoRevisit:
     """Without the addition a coasted target is seen again only when a square passes over it."""
 
@@ -106,22 +125,23 @@ class TrackRevisit:
         pose = np.asarray(pose, dtype=float).reshape(2)
         walk_goal = np.asarray(walk_goal, dtype=float).reshape(2)
         direct = np.hypot(*(walk_goal - pose))
-        speed, gate = top_speed(params.actions), params.phd.coast_gate
+        speed = top_speed(params.actions)
         best, best_rate = None, 0.0
         # A handful of tracks per agent: this loop is over targets, not particles.
         for track in tracks:
             if track.steps[-1] >= step or not followed_long_enough(track, params):
                 continue
             arrival = meeting_step(track, pose, step, speed)
-            lost = loss_probability(track, arrival, gate)
+            lost = due_loss(track, arrival, params)
             if lost < params.cooperation.revisit_loss:
                 continue
-            goal = track.predict(arrival)
+            goal = expected_point(track, arrival, params)
             reach = float(np.hypot(*(goal - pose)))
             if reach + np.hypot(*(walk_goal - goal)) - direct > params.cooperation.revisit_detour:
                 continue
             alive = params.motion.p_survival ** (arrival - track.steps[-1])
             rate = alive * lost / max(reach, MIN_COST)
             if rate > best_rate:
-                best, best_rate = Revisit(goal, track.predict(step + 1)[None, :]), rate
+                keep = expected_point(track, step + 1, params)[None, :]
+                best, best_rate = Revisit(goal, keep), rate
         return best
