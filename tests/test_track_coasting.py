@@ -7,7 +7,7 @@ from scipy import stats
 from sat_agent.actions import fold
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.track_coasting import (
-    coast_steps, NoCoasting, Track, TrackCoasting)
+    coast_point, coast_steps, NoCoasting, Track, TrackCoasting)
 from sat_agent.config import load_params_file
 from sat_agent.mode_machine import Mode
 from sat_agent.sensor_model import measure
@@ -214,6 +214,40 @@ def test_a_fit_that_leaves_the_area_ends_or_folds_back_as_phd_coast_boundary_say
         np.testing.assert_allclose(step.coasted, [(44.0, 2.0)])
         np.testing.assert_allclose(step.expected, [(44.6, 2.3)])
         np.testing.assert_allclose(coasting.tracks[0].predict(40), (44.0, 2.0))
+
+
+def _along_the_border(coasting=None, steps=20, seed=4):
+    """Feed a noisy walk 1 m inside y = 0 that drifts out at 2 cm a step; return its track."""
+    rng = np.random.default_rng(seed)
+    velocity = np.array([0.6, -0.02])
+    for k in range(1, steps + 1):
+        seen = np.array([20.0, 1.0]) + k * velocity + 0.3 * rng.standard_normal(2)
+        coasting.update(k, seen, [_estimate(seen, velocity)], NONE, NONE)
+    return coasting.tracks[0]
+
+
+def test_clamp_reports_a_fit_just_outside_the_area_at_the_border_and_ends_it_farther_out():
+    params = PARAMS.with_overrides({'phd.coast_boundary': 'clamp'})
+    track = _along_the_border(TrackCoasting(params))
+    assert track.bounds is None                    # 'clamp' does not fold the walk
+    steps = np.arange(21, 400)
+    below = np.array([-track.predict(k)[1] for k in steps])          # how far out of y = 0
+    spread = np.array([track.drift_spread(k) for k in steps])
+    just_out = steps[(below > 0) & (below <= spread)]
+    far_out = steps[below > spread]
+    assert len(just_out) and len(far_out)
+    for k in (just_out[0], just_out[-1]):
+        np.testing.assert_allclose(coast_point(track, k, params), (track.predict(k)[0], 0.0))
+        assert coast_point(track, k, PARAMS) is None                   # 'drop'
+    assert coast_point(track, far_out[0], params) is None
+    inside = steps[below <= 0][0]
+    np.testing.assert_allclose(coast_point(track, inside, params), track.predict(inside))
+    # Through the coasting: reported at the border while just out, with 'drop' not at all.
+    for boundary, reported in (('clamp', [(track.predict(just_out[0])[0], 0.0)]), ('drop', NONE)):
+        coasting = TrackCoasting(PARAMS.with_overrides({'phd.coast_boundary': boundary}))
+        _along_the_border(coasting)
+        step = coasting.update(int(just_out[0]), FAR, [], NONE, NONE)
+        np.testing.assert_allclose(step.coasted.reshape(-1, 2), np.reshape(reported, (-1, 2)))
 
 
 @pytest.mark.parametrize('boundary', ['reflect', 'bounce'])

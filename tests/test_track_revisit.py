@@ -8,7 +8,7 @@ from sat_agent.actions import top_speed
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.track_coasting import KAPPA, Track, TrackCoasting
 from sat_agent.beyond_paper.track_revisit import (
-    loss_probability, meeting_step, NoRevisit, TrackRevisit)
+    due_loss, loss_probability, meeting_step, NoRevisit, TrackRevisit)
 from sat_agent.config import load_params_file
 from sat_agent.state_extraction import TargetEstimate
 from sat_world_sim.inprocess_swarm import InProcessSwarm
@@ -128,6 +128,34 @@ def test_a_revisit_off_the_way_is_left_when_the_detour_is_bounded():
     behind = FAR + (FAR - spot) / np.hypot(*(spot - FAR)) * 5.0
     assert bounded.revisit(step, FAR, [track], behind) is None
     assert TrackRevisit(PARAMS).revisit(step, FAR, [track], behind) is not None
+
+
+def test_a_fit_reported_at_the_border_is_due_once_with_revisit_border():
+    # y = 20 - 0.3 k leaves the area through y = 0 at k = 67; the fit of 20 estimates erring
+    # 0.5 m is out by less than its drift spread for a while ('clamp' reports it at y = 0).
+    clamp = PARAMS.with_overrides({'phd.coast_boundary': 'clamp'})
+    border = clamp.with_overrides({'cooperation.revisit_border': True})
+    start = (20.0, 20.0)
+    track = _followed(start=start).tracks[0]
+    out = next(k for k in range(21, 400) if track.predict(k)[1] < 0)
+    assert -track.predict(out)[1] < track.drift_spread(out)
+    assert due_loss(track, out, border) == 1.0
+    gate = clamp.phd.coast_gate
+    assert due_loss(track, out - 1, border) == loss_probability(track, out - 1, gate) < 1.0
+    assert due_loss(track, out, clamp) == loss_probability(track, out, gate) < 1.0
+    # The revisit flies to the border point, inside the area.
+    pose = np.array([track.predict(out)[0], 12.0])
+    step = next(k for k in range(21, out) if meeting_step(
+        track, pose, k, top_speed(border.actions)) >= out)
+    wanted = TrackRevisit(border).revisit(step, pose, [track], pose)
+    arrival = meeting_step(track, pose, step, top_speed(border.actions))
+    np.testing.assert_allclose(wanted.goal, (track.predict(arrival)[0], 0.0))
+    # Refreshed by an entry just outside (a measurement at the border errs by its noise) with
+    # its fit outside at that step: not due again.
+    refreshed = _followed(start=start).tracks[0]
+    refreshed.add(out, np.array([track.predict(out)[0], -0.3]), VELOCITY, 50)
+    assert refreshed.predict(out)[1] < 0
+    assert due_loss(refreshed, out + 2, border) < 1.0
 
 
 def test_the_switch_chooses_the_component():

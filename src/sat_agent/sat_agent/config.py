@@ -259,7 +259,9 @@ class PhdParams:
     # Persistent profile, paired (docs/persistent_trials.md): 'reflect' at random (dev seeds
     # 4601-4900) tracked +1.70 points (p < 0.001), OSPA +0.07 m (p 0.08), but at paper_random
     # (2001-2200) OSPA +0.08 m (p < 0.001); 'bounce' at random (4901-5200) tracked +0.99,
-    # OSPA +0.15 m (both p < 0.001): folded fits also report dead targets. Not kept.
+    # OSPA +0.15 m (both p < 0.001): folded fits also report dead targets. 'clamp' (session
+    # 33) at random (8101-8400) tracked +0.70 (p < 0.001), OSPA +0.01 m, but at paper_random
+    # OSPA +0.02 m (p < 0.001). Not kept.
     coast_boundary: str = param(
         'drop', "additions.track_coasting: a coasted fit that leaves the area: 'drop' ends the "
         "track, 'reflect' folds the walk back into the area as the world's targets bounce, "
@@ -401,7 +403,9 @@ class CooperationParams:
         float(MANY), 'additions.track_revisit: and flying over it lengthens the way to the '
         "walk's next node by at most this (m)", low=0, high=MANY)
     # Session 33: with phd.coast_boundary 'clamp' a target that died at the border is
-    # reported there until its fit leaves by its drift spread (docs/persistent_trials.md).
+    # reported there until its fit leaves by its drift spread. With 'clamp', at random (dev
+    # seeds 8101-8400, paired with 'clamp' alone) tracked -0.12 points, OSPA -0.00 m,
+    # area searched by k = 100 -0.15 (p < 0.001): not kept (docs/persistent_trials.md).
     revisit_border: bool = param(
         False, "additions.track_revisit: with phd.coast_boundary 'clamp', a coasted target "
         'whose fit has left the area since its last estimate (reported at the border) is due '
