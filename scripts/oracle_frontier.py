@@ -14,8 +14,10 @@ floors hold at once (detected >= 90 % of the oracle sweep's, tracked >= 45 %, OS
 saw and no longer sees, moved on at their true velocity (oracle_sweep.py, the oracle reading of
 additions.track_coasting); ``--scans N --window W`` counts a target found only once one agent
 has had it in view on N of its last W steps (oracle_sweep.py's sensor-limited reading: a
-detector that needs N scans; the floors stay those of the perfect sensor's sweep). No filter,
-no radio: a run costs ~0.2 s. Then, from
+detector that needs N scans; the floors stay those of the perfect sensor's sweep); ``--tour``
+has the agents ride evenly phased slots of one closed tour instead of strips (oracle_sweep.py;
+the floors stay those of the strips' sweep, issue 8's ceiling). No filter, no radio: a run
+costs ~0.2 s. Then, from
 an evaluation.csv (``--csv``, make evaluate's by default), the persistent profile's means on
 the same metrics and its paired differences to the oracle sweep-and-track cell (follow limit
 none, every agent a follower, no dispatch) on the seeds both have, with the tables' 95 %
@@ -23,7 +25,7 @@ bootstrap CI and Wilcoxon mark (paired_statistics.py).
 
     scripts/with_env.sh python scripts/oracle_frontier.py [--setting random] [--seeds 50]
         [--first-seed 1] [--limits 0 15 30 60 100 none] [--followers F] [--dispatch] [--coast]
-        [--scans 1 --window 1] [--csv docs/evaluation.csv]
+        [--scans 1 --window 1] [--tour] [--csv docs/evaluation.csv]
 """
 
 import argparse
@@ -59,11 +61,12 @@ def limit_value(text: str):
 
 
 def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = False,
-                   coast: bool = False, scans: int = 1, window: int = 1) -> dict:
+                   coast: bool = False, scans: int = 1, window: int = 1,
+                   tour: bool = False) -> dict:
     """Return the mean METRICS of the oracle with one follow limit (0: the sweep).
 
-    followers, dispatch, coast, scans, window: run_oracle_sweep's (None, False, False, 1, 1:
-    the sweep-and-track cell).
+    followers, dispatch, coast, scans, window, tour: run_oracle_sweep's (None, False, False, 1,
+    1, False: the sweep-and-track cell).
     """
     cell = default_cell(setting, 'oracle', policy=ORACLE, planner='none')
     params = cell.params(load_params_file(ROOT / 'config' / f'{cell.profile}.yaml'))
@@ -73,7 +76,7 @@ def frontier_point(setting: str, seeds, limit, followers=None, dispatch: bool = 
         scenario = scenario_for(cell, seed, params, paper)
         run = run_oracle_sweep(scenario, params, follow=limit != 0, follow_limit=limit,
                                followers=followers, dispatch=dispatch, coast=coast,
-                               scans=scans, window=window)
+                               scans=scans, window=window, tour=tour)
         rows.append(compute_metrics(run.records, scenario.name, seed)['summary'])
     return {name: float(np.mean([row[name] for row in rows])) for name in METRICS}
 
@@ -116,6 +119,8 @@ def main(argv=None) -> int:
                         help='scans of a target one agent needs within --window to find it')
     parser.add_argument('--window', type=int, default=None,
                         help='steps within which the --scans count (default: --scans)')
+    parser.add_argument('--tour', action='store_true',
+                        help='agents ride evenly phased slots of one closed tour, not strips')
     parser.add_argument('--csv', default=str(ROOT / 'docs' / RUNS_CSV),
                         help='evaluation.csv with the persistent and sweep-and-track cells')
     args = parser.parse_args(argv)
@@ -134,14 +139,16 @@ def main(argv=None) -> int:
           f'{"all" if args.followers is None else args.followers}'
           f'{", dispatched to any target seen" if args.dispatch else ""}'
           f'{", coasting what they saw" if args.coast else ""}'
-          f'{f", found on {args.scans} scans in {window} steps" if args.scans > 1 else ""}')
+          f'{f", found on {args.scans} scans in {window} steps" if args.scans > 1 else ""}'
+          f'{"; riding one tour" if args.tour else ""}')
     print('| follow limit (steps) | detected % | tracked % | OSPA (m) | all floors |')
     print('| --- | --- | --- | --- | --- |')
     for limit in args.limits:
         try:
-            point = (sweep if limit == 0 and not args.coast and args.scans == 1 else
-                     frontier_point(args.setting, seeds, limit, args.followers, args.dispatch,
-                                    args.coast, args.scans, window))
+            point = (sweep if limit == 0 and not (args.coast or args.tour) and args.scans == 1
+                     else frontier_point(args.setting, seeds, limit, args.followers,
+                                         args.dispatch, args.coast, args.scans, window,
+                                         args.tour))
         except ValueError as error:
             parser.error(f'--followers {args.followers}: {error}')
         met = (point['detected_share'] >= CEILING_SHARE * sweep['detected_share']

@@ -104,3 +104,17 @@ def test_the_frontier_passes_coast_and_coasting_even_the_sweep_tracks(tmp_path, 
     assert 'coasting what they saw' in out
     assert f'| 0 | {100 * sweep["detected_share"]:.1f} | {100 * sweep["tracked_share"]:.1f} |' \
         in out
+
+
+def test_the_frontier_rides_the_tour_and_keeps_the_strips_floors(tmp_path, capsys):
+    assert FRONTIER['main'](['--seeds', '2', '--limits', '0', '--tour',
+                             '--csv', str(tmp_path / RUNS_CSV)]) == 0
+    out = capsys.readouterr().out
+    tour = FRONTIER['frontier_point']('random', (1, 2), 0, tour=True)
+    strips = FRONTIER['frontier_point']('random', (1, 2), 0)
+    assert tour != strips
+    assert 'riding one tour' in out
+    # The floor is a share of the strips' sweep (issue 8's ceiling), the row the tour's.
+    assert f'detected >= {0.9 * strips["detected_share"]:.1%}' in out
+    assert f'| 0 | {100 * tour["detected_share"]:.1f} | {100 * tour["tracked_share"]:.1f} |' \
+        in out

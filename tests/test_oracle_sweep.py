@@ -5,12 +5,13 @@ import pytest
 
 from sat_agent.actions import top_speed
 from sat_agent.beyond_paper.track_coasting import coast_steps
-from sat_agent.config import SatParams
+from sat_agent.config import AreaParams, SatParams
 from sat_agent.sensor_model import in_sensing_square
 from sat_world_sim.metrics import compute_metrics
 from sat_world_sim.oracle_sweep import Confirmation, follow_position, lane_ends, lap_positions
 from sat_world_sim.oracle_sweep import run_oracle_sweep
-from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions
+from sat_world_sim.oracle_sweep import strip_lanes, sweep_cycle, sweep_positions, tour_cycle
+from sat_world_sim.oracle_sweep import tour_lap, tour_positions
 from sat_world_sim.random_scenarios import random_scenario
 from sat_world_sim.scenario import scenario_from_mapping
 from sat_world_sim.world_model import World
@@ -66,6 +67,90 @@ def test_sweep_positions_start_at_the_start_and_never_exceed_the_speed():
     steps = np.hypot(*np.diff(path, axis=0).T)
     assert steps.max() <= speed + 1e-9
     assert np.all((path >= 0.0) & (path <= 100.0))
+
+
+def area_cells(area: AreaParams) -> np.ndarray:
+    """Centres of the area's 1 m lattice cells."""
+    xs, ys = np.arange(0.5, area.width, 1.0), np.arange(0.5, area.height, 1.0)
+    return np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+
+
+def test_the_tour_is_one_closed_lap_over_every_lane_flown_once():
+    lap = tour_lap(PARAMS)
+    # 10 lanes: up the first (90 m), nine snaked over 80 m with 10 m between them, 10 m down
+    # to the lowest row and 90 m back along it: 1000 m, each leg in ceil(length / 4 m) steps.
+    assert len(lap) == 2 * 23 + 9 * 20 + 9 * 3 + 3 == 256
+    np.testing.assert_allclose(lap[-1], (5.0, 5.0))
+    steps = np.hypot(*np.diff(np.vstack([lap[-1:], lap]), axis=0).T)
+    assert steps.max() <= top_speed(PARAMS.actions) + 1e-9
+    assert math.isclose(steps.sum(), 1000.0)
+    seen = in_sensing_square(area_cells(PARAMS.area)[None, :, :], lap[:, None, :], SIDE)
+    assert seen.any(axis=0).all()
+
+
+@pytest.mark.parametrize('width, height', [(90.0, 100.0), (10.0, 60.0), (60.0, 10.0)])
+def test_odd_lane_counts_one_lane_and_one_row_still_close_and_cover_the_area(width, height):
+    params = SatParams().with_overrides({'area.width': width, 'area.height': height})
+    cycle = tour_cycle(np.array([(x, y) for x in np.arange(5.0, width, 10.0)
+                                 for y in np.arange(5.0, height, 10.0)]))
+    np.testing.assert_allclose(cycle[0], (5.0, 5.0))
+    lap = tour_lap(params)
+    np.testing.assert_allclose(lap[-1], cycle[0])
+    seen = in_sensing_square(area_cells(params.area)[None, :, :], lap[:, None, :], SIDE)
+    assert seen.any(axis=0).all()
+
+
+@pytest.mark.parametrize('agents', [1, 2, 3, 4, 8])
+def test_evenly_phased_slots_see_every_cell_within_ceil_p_over_n_steps(agents):
+    # A cell slot 0 sees at t is seen by slot r at t - floor(r P / n): consecutive sightings
+    # are at most ceil(P / n) apart, against a strip's whole ping-pong period (150 steps for
+    # the 4-agent strips of three lanes).
+    lap = tour_lap(PARAMS)
+    period = len(lap)
+    offsets = np.arange(agents) * period // agents
+    slots = lap[(np.arange(period)[:, None] + offsets[None, :]) % period]
+    seen = in_sensing_square(area_cells(PARAMS.area)[None, None, :, :], slots[:, :, None, :],
+                             SIDE).any(axis=1)
+    times = [np.flatnonzero(column) for column in seen.T]
+    gaps = [np.diff(np.append(t, t[0] + period)).max() for t in times]
+    assert max(gaps) <= math.ceil(period / agents)
+
+
+def test_tour_positions_fly_to_the_first_reachable_slot_point_wait_and_ride():
+    lap, speed = tour_lap(PARAMS), top_speed(PARAMS.actions)
+    start, phase = np.array([52.3, 47.9]), 200
+    path = tour_positions(start, lap, phase, speed, 300)
+    assert path.shape == (300, 2)
+    np.testing.assert_allclose(path[0], start)
+    assert np.hypot(*np.diff(path, axis=0).T).max() <= speed + 1e-9
+    slot = lap[(phase + np.arange(300)) % len(lap)]
+    riding = np.flatnonzero(np.all(np.isclose(path, slot), axis=1))
+    meet = riding[0]
+    np.testing.assert_array_equal(riding, np.arange(meet, 300))
+    # No earlier point of the slot was within reach.
+    ahead = np.arange(1, meet)
+    assert np.all(np.hypot(*(slot[ahead] - start).T) > ahead * speed)
+
+
+def test_the_tour_oracle_finds_what_enters_and_a_follower_rejoins_its_slot():
+    scenario = random_scenario(5, 4, 200)
+    run = run_oracle_sweep(scenario, PARAMS, tour=True)
+    summary = compute_metrics(run.records, scenario.name, 5)['summary']
+    assert summary['detected_share'] == summary['entered_share'] > 0.0
+    lap = tour_lap(PARAMS)
+    # By the last step every agent rides its slot, a quarter lap apart.
+    last = len(run.records) - 1
+    for rank, agent_id in enumerate(sorted(run.records[-1].agent_poses)):
+        np.testing.assert_allclose(run.records[-1].agent_poses[agent_id],
+                                   lap[(last + rank * len(lap) // 4) % len(lap)])
+    followed = followed_scenario()
+    run = run_oracle_sweep(followed, PARAMS, follow=True, tour=True)
+    poses = np.array([r.agent_poses[1] for r in run.records])
+    modes = [r.modes[1] for r in run.records]
+    back = modes.index('SEARCH')
+    assert back > 1 and 'TRACK' not in modes[back:]
+    np.testing.assert_allclose(poses[back:], tour_positions(
+        poses[back], lap, back % len(lap), top_speed(PARAMS.actions), len(poses) - back))
 
 
 def test_the_oracle_detects_exactly_the_targets_that_enter_a_square_on_the_same_truth():

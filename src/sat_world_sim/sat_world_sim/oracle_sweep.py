@@ -45,6 +45,26 @@ flies to it at most v a step and follows it from then on: the team knows where e
 has seen is, as a swarm sharing perfect tracks would. Both keep the strips: an agent flies back
 to its own when it stops following. README (issue 15) has their figures: none meets the floors.
 
+With ``tour`` (session 35) the agents do not fly strips: they ride one closed tour over every
+lane, evenly phased, the cyclic strategy of persistent patrolling (Chevaleyre, "Theoretical
+analysis of the multi-agent patrolling problem", IAT 2004), which keeps every cell's idle time
+near P/n steps where a strip's ends wait a whole ping-pong lap:
+
+- Tour (``tour_cycle``): up the first lane over every row, the other lanes snaked over every
+  row but the lowest, back along the lowest row (closed, no lane flown twice, for an even lane
+  count; an odd count flies the last lane down again; one lane or one row forth and back). At
+  the default (10 lanes of 90 m, a = 10 m, v = 4 m) it is 1000 m, P = 256 steps.
+- Slots: agent i of n (ascending ids, rank r = 0 .. n - 1) owns the slot at
+  lap[(row + floor(r P / n)) mod P] at record row. From its start (and, following, when its
+  target dies or is released) it flies straight at v to the first point of its slot it can
+  reach (``tour_positions``), waits there for the slot, then rides it. A slot left by a
+  follower stays empty; nobody closes the gap.
+
+At the random default it finds more targets than the strips (+9 points over 300 fresh dev
+seeds; README, issue 15, and docs/persistent_trials.md, sessions 34-35, have the paired
+figures), but it is not a new yardstick: issue 8's ceiling, which issue 15's detected floor is
+a share of, stays the strips' sweep.
+
 With ``coast`` the agents also report the targets they saw and no longer see, as
 additions.track_coasting does (beyond_paper/track_coasting.py) but knowing the velocity: an
 agent that had a target in its square at step s reports x_s + v_s (k - s) T at k, while
@@ -63,6 +83,7 @@ sweep's: no agent turns back for a target seen once, as the filter's looks do, s
 ceiling of a sweep with a multi-scan detector, not of our policy.
 """
 
+from functools import partial
 import time
 from typing import List, Optional
 
@@ -137,6 +158,50 @@ def sweep_positions(start, cycle: np.ndarray, speed: float, steps: int) -> np.nd
     return np.vstack([approach, laps])[:steps]
 
 
+def tour_cycle(centers: np.ndarray) -> np.ndarray:
+    """Return (W, 2) waypoints of the closed tour over the square centres (module docstring).
+
+    The first waypoint is the lowest row of the first lane; the lap closes back on it.
+    """
+    centers = np.asarray(centers, dtype=float).reshape(-1, 2)
+    lanes, rows = np.unique(centers[:, 0]), np.unique(centers[:, 1])
+    low, high = rows[0], rows[-1]
+    if len(lanes) == 1 or len(rows) == 1:
+        return np.array([[lanes[0], low], [lanes[-1], high]])
+    second = rows[1]
+    points = [(lanes[0], low), (lanes[0], high)]
+    for number, x in enumerate(lanes[1:]):
+        points.extend([(x, y) for y in ((high, second) if number % 2 == 0 else (second, high))])
+    if points[-1][1] != second:
+        points.append((lanes[-1], second))
+    points.append((lanes[-1], low))
+    return np.array(points)
+
+
+def tour_lap(params: SatParams) -> np.ndarray:
+    """Return (P, 2) positions of one lap of the tour over the search map's square centres."""
+    tour = SearchMap.for_area(params.area, params.sensor.square_side)
+    return lap_positions(tour_cycle(tour.centers), top_speed(params.actions))
+
+
+def tour_positions(start, lap: np.ndarray, phase: int, speed: float, steps: int) -> np.ndarray:
+    """Return (steps, 2) positions from start riding the slot that is at lap[phase] now.
+
+    The first is start; the agent flies straight at speed to the slot's first point it can
+    reach, lap[(phase + t) mod P] with the least t >= 1 within t speed, waits there until the
+    slot arrives (row t) and rides it from then on.
+    """
+    start = np.asarray(start, dtype=float)
+    period = len(lap)
+    ahead = np.arange(1, period + 1)
+    reach = np.hypot(*(lap[(phase + ahead) % period] - start).T) <= ahead * speed + 1e-9
+    meet = int(ahead[np.argmax(reach)])
+    approach = leg_positions(start, lap[(phase + meet) % period], speed)
+    wait = np.repeat(lap[[(phase + meet) % period]], meet - len(approach), axis=0)
+    ride = lap[(phase + meet + np.arange(1, max(steps - meet, 0) + 1)) % period]
+    return np.vstack([start[None, :], approach, wait, ride])[:steps]
+
+
 def follow_position(pose, state, speed: float, params: SatParams) -> np.ndarray:
     """Return a follower's next position: towards the target's x + v T inside the area, <= v.
 
@@ -152,18 +217,22 @@ def follow_position(pose, state, speed: float, params: SatParams) -> np.ndarray:
 
 
 class _Sweeper:
-    """One agent of the oracle: its cycle, the path it is on and the target it follows."""
+    """One agent of the oracle: its route, the path it is on and the target it follows.
 
-    def __init__(self, start, cycle: np.ndarray, speed: float, steps: int):
-        self.cycle, self.speed = cycle, speed
-        self.path = sweep_positions(start, cycle, speed, steps)
+    route(start, row, count): the (count, 2) positions from start at record row on, flying its
+    strip (sweep_positions) or riding its slot of the tour (tour_positions).
+    """
+
+    def __init__(self, start, route, steps: int):
+        self.route = route
+        self.path = route(start, 0, steps)
         self.cursor = 0
         self.target = None
         self.since = 0
 
-    def resume(self, pose, steps_left: int) -> None:
-        """Back to the strip from pose: its nearest waypoint, then laps (sweep_positions)."""
-        self.path = sweep_positions(pose, self.cycle, self.speed, steps_left)
+    def resume(self, pose, row: int, steps_left: int) -> None:
+        """Back to the route from pose at record row (its strip or its slot)."""
+        self.path = self.route(pose, row, steps_left)
         self.cursor = 0
         self.target = None
 
@@ -202,7 +271,8 @@ def _assign_followers(team, truth, poses, in_view: dict, row: int, released: set
 def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int] = None,
                      follow: bool = False, follow_limit: Optional[int] = None,
                      followers: Optional[int] = None, dispatch: bool = False,
-                     coast: bool = False, scans: int = 1, window: int = 1) -> SwarmRun:
+                     coast: bool = False, scans: int = 1, window: int = 1,
+                     tour: bool = False) -> SwarmRun:
     """Run the oracle sweep (follow: sweep-and-track) over the scenario's truth (docstring).
 
     follow_limit: the most steps an agent follows one target (None: until it dies).
@@ -211,6 +281,7 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
     coast: report the targets seen before and out of view now (module docstring).
     scans, window: a target is found once one agent had it in view on scans of its last window
     steps (module docstring; 1 and 1: at first sight).
+    tour: ride evenly phased slots of one closed tour instead of strips (module docstring).
 
     Records as the in-process swarm's. The truth is the World's, so for a seed the oracle meets
     the same targets as every policy. final_density is the coverage (1 where some square has
@@ -221,10 +292,9 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
     world = World(scenario, params)
     ids = world.agent_ids
     speed = top_speed(params.actions)
-    ends = lane_ends(params)
     starts = {a.agent_id: a.start for a in scenario.agents}
-    team = {agent_id: _Sweeper(starts[agent_id], sweep_cycle(lanes, ends), speed, steps)
-            for agent_id, lanes in zip(ids, strip_lanes(params, len(ids)))}
+    team = {agent_id: _Sweeper(starts[agent_id], route, steps)
+            for agent_id, route in zip(ids, _routes(params, len(ids), speed, tour))}
     side = params.sensor.square_side
     limit = np.inf if follow_limit is None else follow_limit
     count = len(ids) if followers is None else followers
@@ -253,7 +323,7 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
                     released.add(sweeper.target)
                 elif sweeper.target in alive:
                     continue
-                sweeper.resume(poses[agent_id], steps - row)
+                sweeper.resume(poses[agent_id], row, steps - row)
             _assign_followers(chasers, truth, poses, in_view, row, released, known)
         records.append(StepRecord(
             step=world.step, truth_ids=truth.ids, truth_positions=truth.positions,
@@ -268,6 +338,25 @@ def run_oracle_sweep(scenario: Scenario, params: SatParams, steps: Optional[int]
         world.advance()
     return SwarmRun(scenario, records, world.coverage.astype(float),
                     time.perf_counter() - started)
+
+
+def _routes(params: SatParams, agents: int, speed: float, tour: bool) -> list:
+    """Return each agent's route (_Sweeper), in ascending id order: a strip or a tour slot."""
+    if tour:
+        lap = tour_lap(params)
+        return [partial(_ride, lap=lap, offset=rank * len(lap) // agents, speed=speed)
+                for rank in range(agents)]
+    ends = lane_ends(params)
+    return [partial(_fly_strip, cycle=sweep_cycle(lanes, ends), speed=speed)
+            for lanes in strip_lanes(params, agents)]
+
+
+def _ride(start, row: int, count: int, lap, offset: int, speed: float) -> np.ndarray:
+    return tour_positions(start, lap, (offset + row) % len(lap), speed, count)
+
+
+def _fly_strip(start, row: int, count: int, cycle, speed: float) -> np.ndarray:
+    return sweep_positions(start, cycle, speed, count)
 
 
 def _next_position(sweeper: _Sweeper, pose, truth, speed: float,
