@@ -44,6 +44,19 @@ def test_a_tentative_peak_is_followed_with_the_tracking_control_until_the_budget
         look.look(Mode.SEARCH, elsewhere, 0, BirthSpots.empty()).peaks.positions(), [[80.0, 20.0]])
 
 
+def test_with_peak_look_keep_a_tentative_peak_is_kept_in_view_by_the_search_move():
+    params = SatParams().with_overrides({'search.peak_look': 'keep'})
+    budget = params.search.investigate_steps
+    look = Investigation(params)
+    seen = tentative(peak((50.0, 50.0), velocity=(1.0, 0.0)))
+    for step in range(budget):
+        kept = look.look(Mode.SEARCH, seen, 0, BirthSpots.empty())
+        assert kept.peaks is None, step
+        np.testing.assert_allclose(kept.keep, [[51.0, 50.0]])
+    # The same budget as with the tracking control: then the spot is abandoned.
+    assert look.look(Mode.SEARCH, seen, 0, BirthSpots.empty()) is NO_LOOK
+
+
 def test_a_peak_that_fades_for_a_scan_is_kept_in_view_one_step_by_the_search_move():
     params = SatParams()
     look = Investigation(params)

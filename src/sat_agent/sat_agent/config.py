@@ -65,6 +65,7 @@ BIRTH_PRIORS = ('uniform', 'undetected')
 SCAN_DETECTIONS = ('square', 'births')
 COAST_BOUNDARIES = ('drop', 'reflect', 'bounce', 'clamp')
 COAST_REPORTS = ('survival', 'ospa')
+PEAK_LOOKS = ('track', 'keep')
 # Upper bound of the counts below: far beyond any run, low enough to catch a typo.
 MANY = 10000
 
@@ -313,6 +314,13 @@ class SearchParams:
     look_spot_share: float = param(
         1.0, 'additions.investigation: a newborn spot is kept in view when its measurement '
         'seeds at least this share of phd.tentative_threshold', low=0, high=10, low_open=True)
+    # 'track' is the addition as first measured. 'keep' (session 37) spends a look's steps on
+    # the walk as a newborn spot's: in the swarm without targets (clutter only) the looks cost
+    # the squares 4.1 points of a synthetic target set, 'keep' 2.6 (docs/persistent_trials.md).
+    peak_look: str = param(
+        'track', 'additions.investigation: how a searching agent looks at a tentative peak: '
+        "'track' holds its walk and places itself with the tracking control, 'keep' keeps the "
+        'peak in its next square with the search move', choices=PEAK_LOOKS)
     # Follows the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
     replan_period: int = param(
         10, 'additions.persistent_planning: every agent in SEARCH replans (jointly with the '

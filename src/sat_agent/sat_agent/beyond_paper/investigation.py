@@ -2,27 +2,28 @@
 
 Paper: an agent searches (follows its closed walk, control "b) Control" of Section
 "Multi-agent Searching") until targets are found, then tracks; it has nothing in between.
-Addition: a searching agent that sees a tentative peak (an unconfirmed PHD peak, state
-extraction) holds its walk for up to ``search.investigate_steps`` steps and places itself with
-the tracking control (Eqn. track_control, with its stand-off when additions.track_standoff is
-on) on that peak; a target then reaches the confirmation and the agent enters TRACK, a clutter
-cloud fades and the walk resumes. One spot at a time, the heaviest; the spot of a spent budget
-is abandoned: tentative peaks near it (within ``phd.continue_gate``) are ignored for
-2 * investigate_steps steps. Without a tentative peak, the heaviest newborn spot of this scan
-(a measurement seeding at least ``phd.tentative_threshold`` of birth mass) gets one step of the
-budget, spent on the search move that keeps the spot ``cooperation.track_edge_margin`` inside
-the next square (``keep_in_view_action``; ``search.look_spots`` > 1 keeps as many of the
-heaviest as one move can hold, ``search.look_spot_share`` < 1 lowers the bar, both measured
-and left at 1 in session 23, README issue 15): a real target is then a tentative peak at the
-next scan, a false alarm leaves nothing and the walk resumes at once. Nothing is looked at
-during the rejoin cooldown (after an overlap exit or leaving followed targets). A peak that
-fades for a scan (a miss, a near pass) is looked at like a newborn spot: one step of the budget
-on the search move that keeps it, where its velocity takes it, in the next square; back at the
-next scan it is a tentative peak again, gone it is left. Following it with the tracking
-control for the rest of the budget instead (tried, session 16) detected no more on the dev
-seeds 2001-2100 (persistent -0.6 points at random and -5.0 at paper_random, cooperative +0.0
-at paper_random) and searched 2.4 points less of the area by k = 100 with two agents (for one
-step only: 0.9 less); README, issue 15.
+Addition: a searching agent that sees a tentative peak (an unconfirmed PHD peak, state extraction)
+holds its walk for up to ``search.investigate_steps`` steps and places itself with the tracking
+control (Eqn. track_control, with its stand-off when additions.track_standoff is on) on that peak;
+a target then reaches the confirmation and the agent enters TRACK, a clutter cloud fades and the
+walk resumes. One spot at a time, the heaviest; the spot of a spent budget is abandoned: tentative
+peaks near it (within ``phd.continue_gate``) are ignored for 2 * investigate_steps steps. Without a
+tentative peak, the heaviest newborn spot of this scan (a measurement seeding at least
+``phd.tentative_threshold`` of birth mass) gets one step of the budget, spent on the search move
+that keeps the spot ``cooperation.track_edge_margin`` inside the next square
+(``keep_in_view_action``; ``search.look_spots`` > 1 keeps as many of the heaviest as one move can
+hold, ``search.look_spot_share`` < 1 lowers the bar, both measured and left at 1 in session 23,
+README issue 15): a real target is then a tentative peak at the next scan, a false alarm leaves
+nothing and the walk resumes at once. With ``search.peak_look`` 'keep' a tentative peak is looked
+at the same way, by the search move that keeps it in the next square, for up to its budget: the
+walk advances while the peak is scanned (session 37). Nothing is looked at during the rejoin
+cooldown (after an overlap exit or leaving followed targets). A peak that fades for a scan (a miss,
+a near pass) is looked at like a newborn spot: one step of the budget on the search move that keeps
+it, where its velocity takes it, in the next square; back at the next scan it is a tentative peak
+again, gone it is left. Following it with the tracking control for the rest of the budget instead
+(tried, session 16) detected no more on the dev seeds 2001-2100 (persistent -0.6 points at random
+and -5.0 at paper_random, cooperative +0.0 at paper_random) and searched 2.4 points less of the
+area by k = 100 with two agents (for one step only: 0.9 less); README, issue 15.
 Why: one pass of a searching agent gives a target 2-3 scans, too few to confirm it under
 clutter (a tracked target's PHD mass grows by ~1 + g / kappa per scan, and not at all while
 the agent flies over it); and newborns the next square does not cover are dropped
@@ -97,7 +98,8 @@ class Investigation:
         dt = self.params.motion.dt
         self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
         ahead = MultiTargetEstimate(self._look, 0.0)
-        return Look(keep=ahead.positions()) if self._keeping_in_view else Look(peaks=ahead)
+        keep = self._keeping_in_view or self.params.search.peak_look == 'keep'
+        return Look(keep=ahead.positions()) if keep else Look(peaks=ahead)
 
     def _fresh(self, spots: Sequence[TargetEstimate]) -> tuple:
         """Return the spots farther than phd.continue_gate from every abandoned spot."""
