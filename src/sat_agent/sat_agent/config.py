@@ -315,8 +315,9 @@ class SearchParams:
         1.0, 'additions.investigation: a newborn spot is kept in view when its measurement '
         'seeds at least this share of phd.tentative_threshold', low=0, high=10, low_open=True)
     # 'track' is the addition as first measured. 'keep' (session 37) spends a look's steps on
-    # the walk as a newborn spot's: in the swarm without targets (clutter only) the looks cost
-    # the squares 4.1 points of a synthetic target set, 'keep' 2.6 (docs/persistent_trials.md).
+    # the walk as a newborn spot's; rule 20 (persistent profile, random, fresh dev seeds
+    # 9441-9740, paired): detected -1.1, tracked -0.7 points, OSPA +0.06 m, none significant:
+    # not kept (docs/persistent_trials.md).
     peak_look: str = param(
         'track', 'additions.investigation: how a searching agent looks at a tentative peak: '
         "'track' holds its walk and places itself with the tracking control, 'keep' keeps the "
