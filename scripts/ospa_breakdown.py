@@ -18,11 +18,11 @@ from multiprocessing import Pool
 from pathlib import Path
 
 import numpy as np
-from scipy import stats
 
 from sat_agent.config import load_params_file
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.ospa_breakdown import false_sources, SOURCES, what_if_ospa, WHAT_IFS
+from sat_world_sim.paired_statistics import mean_interval
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import default_cell, PERSISTENT_LABEL, PERSISTENT_PROFILE
 from sat_world_sim.study_design import scenario_for, SETTINGS
@@ -41,16 +41,6 @@ def one_seed(job) -> tuple:
     what_ifs = what_if_ospa(found.records)
     return ([what_ifs[name] for name in WHAT_IFS], [found.counts[s] for s in SOURCES],
             [found.mean_ospa_without[s] for s in SOURCES])
-
-
-def interval(values) -> str:
-    """Mean and 95 % t interval of per-seed values."""
-    values = np.asarray(values, dtype=float)
-    mean = float(values.mean())
-    if len(values) < 2:
-        return f'{mean:.3f}'
-    half = stats.t.ppf(0.975, len(values) - 1) * stats.sem(values)
-    return f'{mean:.3f} [{mean - half:.3f}, {mean + half:.3f}]'
 
 
 def main(argv=None) -> int:
@@ -73,11 +63,13 @@ def main(argv=None) -> int:
     print('what-if: mean OSPA (m) [95 % t interval], change against reported')
     for column, name in enumerate(WHAT_IFS):
         change = what_ifs[:, column] - what_ifs[:, 0]
-        print(f'  {name:26s} {interval(what_ifs[:, column])}  {change.mean():+.3f}')
+        print(f'  {name:26s} {mean_interval(what_ifs[:, column]).describe(3)}'
+              f'  {change.mean():+.3f}')
     print('false reports (> c from every target): report-steps per run; mean OSPA without them')
     for column, name in enumerate(SOURCES):
         change = without[:, column] - what_ifs[:, 0]
-        print(f'  {name:26s} {interval(counts[:, column])}  {interval(without[:, column])}'
+        print(f'  {name:26s} {mean_interval(counts[:, column]).describe(3)}  '
+              f'{mean_interval(without[:, column]).describe(3)}'
               f'  {change.mean():+.3f}')
     return 0
 

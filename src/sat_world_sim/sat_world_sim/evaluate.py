@@ -350,12 +350,11 @@ def rewrite_tables(out: Path, readme: Optional[str]) -> str:
 
 # ---------------------------------------------------------------- command line
 
-def trial_values(items: Sequence[str], out, readme) -> Tuple[Tuple[str, object], ...]:
+def set_values(items: Sequence[str]) -> Tuple[Tuple[str, object], ...]:
     """Parse ``--set KEY=VALUE`` items (VALUE is YAML) and check them against the schema.
 
     ValueError (ParameterError: which parameter, what value, what is allowed) for a malformed
-    item or a value the core refuses; a trial is refused an --out of docs/ or a --readme,
-    which hold the committed study.
+    item or a value the core refuses.
     """
     import yaml
 
@@ -369,13 +368,21 @@ def trial_values(items: Sequence[str], out, readme) -> Tuple[Tuple[str, object],
             values.append((key.strip(), yaml.safe_load(text)))
         except yaml.YAMLError as problem:
             raise ValueError(f'--set {item!r}: the value is not YAML: {problem}') from None
-    if not values:
-        return ()
-    SatParams().with_overrides(dict(values))
-    if Path(out).resolve() == Path('docs').resolve() or readme:
+    if values:
+        SatParams().with_overrides(dict(values))
+    return tuple(values)
+
+
+def trial_values(items: Sequence[str], out, readme) -> Tuple[Tuple[str, object], ...]:
+    """Parse a trial's ``--set`` items (``set_values``).
+
+    ValueError also for an --out of docs/ or a --readme, which hold the committed study.
+    """
+    values = set_values(items)
+    if values and (Path(out).resolve() == Path('docs').resolve() or readme):
         raise ValueError('--set makes trial cells, not the committed study: give --out DIR '
                          '(not docs/) and no --readme')
-    return tuple(values)
+    return values
 
 
 def _arguments(argv):

@@ -15,6 +15,8 @@ differences d_s = x_s - r_s (issue 14, item 6):
 ``ratio_of_means`` gives mean(x) / mean(r) with the same paired bootstrap: a policy's detected
 share as a fraction of the oracle sweep's (the ceiling). Seeds where either value is missing
 (None or NaN, e.g. a time to detection with no target) are left out of both.
+``mean_interval`` is the one unpaired figure: a mean over seeds with its t interval, for the
+diagnostics.
 
 The resampling generator is seeded (BOOTSTRAP_SEED), so a study's tables are reproducible.
 """
@@ -41,6 +43,12 @@ class Interval:
     estimate: float
     low: float
     high: float
+
+    def describe(self, digits: int = 2) -> str:
+        """'estimate [low, high]' to the digits given; the estimate alone without an interval."""
+        if not (_finite(self.low) and _finite(self.high)):
+            return f'{self.estimate:.{digits}f}'
+        return f'{self.estimate:.{digits}f} [{self.low:.{digits}f}, {self.high:.{digits}f}]'
 
 
 @dataclass(frozen=True)
@@ -88,6 +96,20 @@ def ratio_of_means(values, reference, confidence: float = CONFIDENCE,
     if not r.size or np.mean(r) == 0:
         return Interval(int(r.size), math.nan, math.nan, math.nan)
     return _bootstrap(x, r, _ratio, confidence, resamples)
+
+
+def mean_interval(values, confidence: float = CONFIDENCE) -> Interval:
+    """Return the mean of unpaired per-seed values with its t interval (none for < 2 values).
+
+    For the diagnostics' figures over seeds (scripts/ospa_breakdown.py, search_coverage.py),
+    which compare nothing paired.
+    """
+    values = np.asarray(values, dtype=float)
+    mean = float(values.mean())
+    if len(values) < 2:
+        return Interval(len(values), mean, math.nan, math.nan)
+    half = stats.t.ppf(0.5 + confidence / 2.0, len(values) - 1) * stats.sem(values)
+    return Interval(len(values), mean, mean - half, mean + half)
 
 
 def _ratio(a, b, axis):

@@ -58,16 +58,20 @@ def random_scenario(seed: int, agents: int, steps: int, width: float = 100.0,
     start_rng, rng = _streams(RANDOM_STREAM, seed)
     starts = start_rng.uniform((EDGE, EDGE), (width - EDGE, height - EDGE), size=(agents, 2))
     area = np.array([width, height])
-    targets = []
-    for target_id in range(1, int(rng.integers(RANDOM_TARGETS[0], RANDOM_TARGETS[1] + 1)) + 1):
-        born = int(rng.integers(RANDOM_BORN[0], RANDOM_BORN[1] + 1))
-        died = born + int(rng.integers(RANDOM_LIFETIME[0], RANDOM_LIFETIME[1] + 1)) - 1
-        start = rng.uniform((0.0, 0.0), area)
-        end = np.clip(start + rng.normal(0.0, SPEED_STD, 2) * (died - born), 0.0, area)
-        targets.append(_target(target_id, born, died, start, end))
+    targets = [_target(target_id, *random_target(rng, area)) for target_id in
+               range(1, int(rng.integers(RANDOM_TARGETS[0], RANDOM_TARGETS[1] + 1)) + 1)]
     return _scenario('random', seed, steps, [{'id': i + 1, 'start': p.tolist()}
                                              for i, p in enumerate(starts)],
                      targets, TRUTH_PROCESS_NOISE, width, height)
+
+
+def random_target(rng: np.random.Generator, area: np.ndarray):
+    """Draw one target of the random default: (born, died, start, end), module docstring."""
+    born = int(rng.integers(RANDOM_BORN[0], RANDOM_BORN[1] + 1))
+    died = born + int(rng.integers(RANDOM_LIFETIME[0], RANDOM_LIFETIME[1] + 1)) - 1
+    start = rng.uniform((0.0, 0.0), area)
+    end = np.clip(start + rng.normal(0.0, SPEED_STD, 2) * (died - born), 0.0, area)
+    return born, died, start, end
 
 
 def paper_random_scenario(seed: int, paper: Scenario, steps: int, width: float = 100.0,

@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Where the search's time goes: one set of synthetic targets against the squares runs flew.
+
+For each seed of the random default (study_design: the same agent starts per seed) the search
+pattern runs in-process: the persistent profile (--pattern profile; by default without the
+seed's targets, --with-targets keeps them) or the oracle sweep's strips or tour
+(oracle_sweep.py). sat_world_sim/search_coverage.py then scores the squares its agents flew
+against one fixed set of synthetic targets drawn as the random default draws its targets: the
+share some square held during its life and the mean steps from birth to that square. Means over
+the seeds with 95 % t intervals. A diagnostic (docs/persistent_trials.md, session 37): its
+figures bound what a pattern lets the filter find, never a reported result.
+
+    scripts/with_env.sh python scripts/search_coverage.py [--pattern profile|strips|tour]
+        [--with-targets] [--static] [--set KEY=VALUE ...] [--seeds 8] [--first-seed 1]
+        [--params config/persistent.yaml] [--synthetic 20000] [--synthetic-seed 12345]
+        [--jobs 2]
+
+e.g. the looks at false alarms: ``--set sensor.clutter_rate=0`` against the default clutter.
+"""
+
+import argparse
+from dataclasses import replace
+from multiprocessing import Pool
+from pathlib import Path
+
+import numpy as np
+
+from sat_agent.config import load_params_file
+from sat_world_sim.evaluate import set_values
+from sat_world_sim.inprocess_swarm import run_swarm
+from sat_world_sim.oracle_sweep import run_oracle_sweep
+from sat_world_sim.paired_statistics import mean_interval
+from sat_world_sim.search_coverage import coverage, synthetic_targets
+from sat_world_sim.study_design import default_cell, PERSISTENT_LABEL, PERSISTENT_PROFILE
+from sat_world_sim.study_design import scenario_for
+
+ROOT = Path(__file__).resolve().parents[1]
+PATTERNS = ('profile', 'strips', 'tour')
+
+
+def one_seed(job) -> tuple:
+    """Return (held share, mean delay) of one seed's squares (module docstring)."""
+    args, values, seed = job
+    cell = default_cell('random', PERSISTENT_LABEL, profile=PERSISTENT_PROFILE,
+                        overrides=values)
+    params = cell.params(load_params_file(args.params))
+    scenario = scenario_for(cell, seed, params, None)
+    if args.pattern != 'profile' or not args.with_targets:
+        scenario = replace(scenario, targets=(), random_births=None)
+    if args.pattern == 'profile':
+        run = run_swarm(scenario, params)
+    else:
+        run = run_oracle_sweep(scenario, params, tour=args.pattern == 'tour')
+    targets = synthetic_targets(args.synthetic, args.synthetic_seed, params.area.width,
+                                params.area.height, args.static)
+    found = coverage(targets, ((r.step, r.agent_poses) for r in run.records),
+                     params.sensor.square_side)
+    return found.held_share, found.mean_delay
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--pattern', choices=PATTERNS, default='profile')
+    parser.add_argument('--with-targets', action='store_true',
+                        help="profile: run with the seed's own targets (looks and tracking)")
+    parser.add_argument('--static', action='store_true',
+                        help='synthetic targets that do not move')
+    parser.add_argument('--set', action='append', default=[], metavar='KEY=VALUE',
+                        help='a parameter of the run (as evaluate --set)')
+    parser.add_argument('--seeds', type=int, default=8)
+    parser.add_argument('--first-seed', type=int, default=1)
+    parser.add_argument('--params', default=str(ROOT / 'config' / 'persistent.yaml'))
+    parser.add_argument('--synthetic', type=int, default=20000)
+    parser.add_argument('--synthetic-seed', type=int, default=12345)
+    parser.add_argument('--jobs', type=int, default=2)
+    args = parser.parse_args(argv)
+    if min(args.seeds, args.jobs, args.synthetic) < 1:
+        parser.error(f'--seeds {args.seeds}, --jobs {args.jobs}, --synthetic '
+                     f'{args.synthetic}: each must be at least 1')
+    if args.with_targets and args.pattern != 'profile':
+        parser.error('--with-targets: only the profile looks at and tracks targets')
+    try:
+        values = set_values(args.set)
+    except ValueError as problem:
+        parser.error(str(problem))
+    jobs = [(args, values, seed) for seed in range(args.first_seed,
+                                                   args.first_seed + args.seeds)]
+    if args.jobs == 1:
+        results = list(map(one_seed, jobs))
+    else:
+        with Pool(args.jobs) as pool:
+            results = pool.map(one_seed, jobs)
+    held, delay = (np.array(part, dtype=float) for part in zip(*results))
+    run = ' '.join([args.pattern + (' with targets' if args.with_targets else '') + ',',
+                    f'random default seeds {jobs[0][2]}-{jobs[-1][2]},', args.params]
+                   + [f'--set {key}={value}' for key, value in values])
+    kind = 'static synthetic targets' if args.static else 'synthetic targets'
+    print(f'{run}\n  {args.synthetic} {kind} (seed {args.synthetic_seed}): held by a square '
+          f'{mean_interval(100.0 * held).describe()} %, mean steps from birth to it '
+          f'{mean_interval(delay).describe()}')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

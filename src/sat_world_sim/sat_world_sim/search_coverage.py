@@ -1,0 +1,99 @@
+"""Where a search pattern's time goes: one fixed set of synthetic targets against flown squares.
+
+A run's detected share mixes the search pattern with the detector, the looks and the tracking,
+and its few targets (2-10 per seed) make it noisy. This diagnostic scores the pattern alone: a
+fixed set of many synthetic targets, drawn as the random default draws its targets
+(``random_scenarios.random_target``: born at a uniform step in [1, 150], living 50-150 steps,
+starting anywhere, walking in a straight line to a clipped end point), is laid over the sensing
+squares a run's agents flew, and each synthetic target counts as held when some agent's square
+(Eqn. sensing_model's S_a) holds it at some step of its life within the run. The same set for
+every run, so two runs differ only by where their squares went. A run's own targets, if it has
+any, steer its agents (looks, tracking) but are not scored; the synthetic ones steer nothing.
+
+Held is not detected: a held target still needs the detector (p_D, clutter, confirmation), so
+the held share bounds what the pattern lets the filter find. The truth's process noise (1e-5)
+is left out: the synthetic targets walk their straight line exactly. ``static`` sets every
+end point to the start, for the share a pattern's revisits give when nothing moves.
+"""
+
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Iterable, Mapping, Tuple
+
+import numpy as np
+
+from sat_agent import sensor_model
+from sat_world_sim.random_scenarios import random_target
+
+
+@dataclass(frozen=True)
+class SyntheticTargets:
+    """Targets alive on the steps born <= k <= died, at start + (end - start) share of life."""
+
+    born: np.ndarray    # (N,) int
+    died: np.ndarray    # (N,) int
+    start: np.ndarray   # (N, 2)
+    end: np.ndarray     # (N, 2)
+
+    def __len__(self) -> int:
+        return len(self.born)
+
+    def alive_at(self, step: int) -> Tuple[np.ndarray, np.ndarray]:
+        """Return (indices, (n, 2) positions) of the targets alive at the step."""
+        alive = np.flatnonzero((self.born <= step) & (step <= self.died))
+        life = np.maximum(self.died[alive] - self.born[alive], 1)
+        share = (step - self.born[alive]) / life
+        start = self.start[alive]
+        return alive, start + (self.end[alive] - start) * share[:, None]
+
+
+@lru_cache(maxsize=4)
+def synthetic_targets(count: int, seed: int, width: float = 100.0, height: float = 100.0,
+                      static: bool = False) -> SyntheticTargets:
+    """Draw count targets of the random default from one seed (module docstring)."""
+    rng = np.random.default_rng(seed)
+    area = np.array([width, height], dtype=float)
+    born, died, start, end = zip(*(random_target(rng, area) for _ in range(count)))
+    start = np.array(start, dtype=float).reshape(-1, 2)
+    return SyntheticTargets(np.array(born, dtype=int), np.array(died, dtype=int), start,
+                            start.copy() if static else np.array(end, dtype=float).reshape(-1, 2))
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """What the squares of one run held of the synthetic targets."""
+
+    held_share: float   # share of the targets some square held at some step of their life
+    mean_delay: float   # mean steps from birth to the first square, over the held ones
+
+    @classmethod
+    def of(cls, targets: SyntheticTargets, first: np.ndarray) -> 'Coverage':
+        """Summarise first_held's steps (-1: never held)."""
+        held = first >= 0
+        delay = (first[held] - targets.born[held]).mean() if held.any() else float('nan')
+        return cls(float(held.mean()) if len(first) else float('nan'), float(delay))
+
+
+def first_held(targets: SyntheticTargets, squares: Iterable[Tuple[int, Mapping[int, object]]],
+               side: float) -> np.ndarray:
+    """Return each target's first step in some square, -1 if none held it.
+
+    squares: (step, {agent: pose}) of every step of a run, the poses of the step's scans (as
+    StepRecord.agent_poses holds them); side: the sensing square's.
+    """
+    first = np.full(len(targets), -1, dtype=int)
+    for step, poses in squares:
+        alive, points = targets.alive_at(step)
+        waiting = first[alive] < 0
+        alive, points = alive[waiting], points[waiting]
+        if not len(alive) or not len(poses):
+            continue
+        centres = np.array([np.asarray(p, dtype=float) for p in poses.values()])
+        inside = sensor_model.in_sensing_square(points[:, None, :], centres[None], side)
+        first[alive[inside.any(axis=1)]] = step
+    return first
+
+
+def coverage(targets: SyntheticTargets, squares, side: float) -> Coverage:
+    """Held share and mean delay of the synthetic targets under a run's squares."""
+    return Coverage.of(targets, first_held(targets, squares, side))

@@ -1,0 +1,74 @@
+"""The search-coverage diagnostic: synthetic targets scored against flown squares."""
+
+from pathlib import Path
+import runpy
+
+import numpy as np
+import pytest
+
+from sat_world_sim.random_scenarios import RANDOM_BORN, RANDOM_LIFETIME
+from sat_world_sim.search_coverage import coverage, first_held, synthetic_targets
+from sat_world_sim.search_coverage import SyntheticTargets
+
+SCRIPT = runpy.run_path(str(Path(__file__).resolve().parents[1] / 'scripts' /
+                            'search_coverage.py'))
+SIDE = 10.0
+
+
+def targets(*rows):
+    """Return SyntheticTargets of (born, died, start, end) rows."""
+    born, died, start, end = zip(*rows)
+    return SyntheticTargets(np.array(born), np.array(died), np.array(start, dtype=float),
+                            np.array(end, dtype=float))
+
+
+def test_a_target_counts_from_the_first_square_that_holds_it_while_it_lives():
+    walkers = targets((1, 100, (20.0, 20.0), (20.0, 20.0)),     # waits where a square passes
+                      (50, 100, (20.0, 20.0), (20.0, 20.0)),    # born after that square
+                      (1, 101, (0.0, 50.0), (100.0, 50.0)))     # walks 1 m a step along y = 50
+    elsewhere = {1: np.array([90.0, 90.0]), 2: np.array([90.0, 10.0])}
+    squares = [(k, elsewhere) for k in range(1, 120)]
+    squares[9] = (10, {1: np.array([20.0, 20.0]), 2: np.array([90.0, 10.0])})
+    squares[29] = (30, {1: np.array([60.0, 50.0])})      # the walker is at x = 29 then
+    squares[60] = (61, {2: np.array([64.0, 54.0])})      # at x = 60: 4 m from its centre
+    np.testing.assert_array_equal(first_held(walkers, squares, SIDE), [10, -1, 61])
+    found = coverage(walkers, squares, SIDE)
+    assert found.held_share == pytest.approx(2 / 3)
+    assert found.mean_delay == pytest.approx(((10 - 1) + (61 - 1)) / 2)
+
+
+def test_a_target_is_not_held_before_its_birth_or_after_its_death():
+    walker = targets((20, 30, (50.0, 50.0), (50.0, 50.0)))
+    over = {1: np.array([50.0, 50.0])}
+    assert first_held(walker, [(19, over), (31, over)], SIDE)[0] == -1
+    assert first_held(walker, [(19, over), (30, over)], SIDE)[0] == 30
+    nothing = coverage(walker, [(25, {})], SIDE)
+    assert nothing.held_share == 0.0 and np.isnan(nothing.mean_delay)
+
+
+def test_synthetic_targets_are_drawn_as_the_random_default_draws_them():
+    drawn = synthetic_targets(2000, 7, 100.0, 80.0)
+    assert drawn is synthetic_targets(2000, 7, 100.0, 80.0)      # one draw per worker
+    life = drawn.died - drawn.born + 1
+    assert drawn.born.min() >= RANDOM_BORN[0] and drawn.born.max() <= RANDOM_BORN[1]
+    assert life.min() >= RANDOM_LIFETIME[0] and life.max() <= RANDOM_LIFETIME[1]
+    for ends in (drawn.start, drawn.end):
+        assert np.all((ends >= 0.0) & (ends <= [100.0, 80.0]))
+    assert np.abs(drawn.end - drawn.start).mean() > 10.0        # they walk
+    static = synthetic_targets(2000, 7, 100.0, 80.0, static=True)
+    np.testing.assert_array_equal(static.end, static.start)
+    np.testing.assert_array_equal(static.start, drawn.start)
+    _, halfway = drawn.alive_at(100)
+    assert np.all((halfway >= 0.0) & (halfway <= [100.0, 80.0]))
+
+
+def test_the_script_scores_a_tour_and_refuses_what_it_cannot_run(capsys):
+    assert SCRIPT['main'](['--pattern', 'tour', '--seeds', '1', '--synthetic', '300',
+                           '--jobs', '1']) == 0
+    out = capsys.readouterr().out
+    share = float(out.split('held by a square ')[1].split(' %')[0])
+    assert 50.0 < share <= 100.0
+    with pytest.raises(SystemExit):
+        SCRIPT['main'](['--pattern', 'strips', '--with-targets'])
+    with pytest.raises(SystemExit):
+        SCRIPT['main'](['--set', 'search.no_such_parameter=1'])
