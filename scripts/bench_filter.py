@@ -26,11 +26,15 @@ Usage: ``python scripts/bench_filter.py [--json]``
    persistent profile the agent never tracks on seed 0); with the default parameters (particle
    budget adaptive, up to 20k) and with the persistent profile (config/persistent.yaml,
    issue 15) at a fixed 20k particles. Percentiles over all steps and per mode.
+3. The tracking control's norm: the persistent decision step again, each seed run once with
+   the control's own norm (sensor_model.plain_hypot) and once with the filter's (np.hypot,
+   the control before session 38), in turns; the runs are the same step for step
+   (tracking_control.py), so the steps pair up: their ratio is what the control's norm saves.
 
 With ``--json`` the last line printed is a JSON object for the 20k "tracking" case with keys
 particles, speedup_vs_stonesoup, speedup_vs_stonesoup_vectorized, decision_step_p95_ms,
-decision_step_p95_ms_persistent_20k and decision_step_p95_ms_persistent_20k_track (its TRACK
-steps only).
+decision_step_p95_ms_persistent_20k, decision_step_p95_ms_persistent_20k_track (its TRACK
+steps only) and decision_step_p95_ms_persistent_20k_hypot (3.).
 """
 
 import argparse
@@ -205,18 +209,26 @@ def filter_rows(params, have_stonesoup):
     return rows
 
 
-def decision_step_ms(params, steps=150, seeds=DECISION_SEEDS):
-    """Time Agent.step in a one-agent in-process loop; return (all samples, per-mode samples)."""
-    samples, modes = [], []
+def decision_step_ms(params, steps=150, seeds=DECISION_SEEDS, norms=(None,)):
+    """Time Agent.step in a one-agent in-process loop: {norm: (all samples, per mode)}.
+
+    norms: the tracking control's (None: its own); with several, each seed runs with each in
+    turns (the order reversed on odd seeds), so a machine's drift weighs on each alike.
+    """
+    runs = {norm: ([], []) for norm in norms}
     for seed in seeds:
-        seed_samples, seed_modes = _timed_run(params, steps, seed)
-        samples += seed_samples
-        modes += seed_modes
-    samples = np.array(samples) * 1e3
-    return samples, {mode: samples[np.array(modes) == mode] for mode in sorted(set(modes))}
+        for norm in (norms if seed % 2 == 0 else norms[::-1]):
+            seed_samples, seed_modes = _timed_run(params, steps, seed, norm)
+            runs[norm][0].extend(seed_samples)
+            runs[norm][1].extend(seed_modes)
+    timed = {}
+    for norm, (samples, modes) in runs.items():
+        samples, modes = np.array(samples) * 1e3, np.array(modes)
+        timed[norm] = samples, {mode: samples[modes == mode] for mode in sorted(set(modes))}
+    return timed
 
 
-def _timed_run(params, steps, seed):
+def _timed_run(params, steps, seed, norm=None):
     """Return the seconds and modes of every Agent.step of one run of the scenario."""
     from sat_world_sim.inprocess_swarm import InProcessSwarm
     from sat_world_sim.scenario import scenario_from_mapping
@@ -234,6 +246,8 @@ def _timed_run(params, steps, seed):
                      'end': [60.0, 60.0]}]})
     swarm = InProcessSwarm(scenario, params)
     agent = swarm.agents[1]
+    if norm is not None:
+        agent.tracking.norm = norm
     timed_step = agent.step
     samples, modes = [], []
 
@@ -250,9 +264,8 @@ def _timed_run(params, steps, seed):
     return samples, modes
 
 
-def print_decision_step(title, params):
-    """Print the decision step's percentiles, overall and per mode; return both samples."""
-    samples, by_mode = decision_step_ms(params)
+def print_decision_step(title, samples, by_mode):
+    """Print the decision step's percentiles, overall and per mode."""
     print(f'decision step ({title}; Agent.step, one-agent in-process loop, seeds '
           f'{DECISION_SEEDS.start}-{DECISION_SEEDS.stop - 1}, {len(samples)} steps): '
           f'p50 {np.percentile(samples, 50):.2f} ms, '
@@ -260,7 +273,6 @@ def print_decision_step(title, params):
     for mode, values in by_mode.items():
         print(f'  {mode}: {len(values)} steps, p50 {np.percentile(values, 50):.2f} ms, '
               f'p95 {np.percentile(values, 95):.2f} ms')
-    return samples, by_mode
 
 
 def main(argv=None) -> int:
@@ -290,13 +302,21 @@ def main(argv=None) -> int:
                      f" | stonesoup vectorised {row['stonesoup_vectorized_ms']:7.2f}"
                      f" (x{row['speedup_vectorized']:.1f})")
         print(line)
-    samples, _ = print_decision_step('default parameters', params)
+    samples, by_mode = decision_step_ms(params)[None]
+    print_decision_step('default parameters', samples, by_mode)
     persistent = load_params_file(REPO / 'config' / 'persistent.yaml')
     persistent = replace(persistent, phd=replace(persistent.phd, min_particles=20000,
                                                  max_particles=20000))
-    persistent_samples, persistent_modes = print_decision_step(
-        'config/persistent.yaml, 20k particles', persistent)
+    timed = decision_step_ms(persistent, norms=(None, np.hypot))
+    persistent_samples, persistent_modes = timed[None]
+    print_decision_step('config/persistent.yaml, 20k particles', *timed[None])
+    print_decision_step('the same, the tracking control with np.hypot', *timed[np.hypot])
+    hypot_samples, hypot_modes = timed[np.hypot]
     tracking = persistent_modes.get('TRACK', np.array([np.nan]))
+    if 'TRACK' in persistent_modes:
+        print(f'  TRACK steps, paired (the same steps): median ratio np.hypot / own '
+              f'x{np.median(hypot_modes["TRACK"] / tracking):.2f}; p95 of all steps '
+              f'x{np.percentile(hypot_samples, 95) / np.percentile(persistent_samples, 95):.2f}')
     if args.json:
         main_row = next(r for r in rows if r['particles'] == 20000 and r['layout'] == 'tracking')
         print(json.dumps({
@@ -308,7 +328,9 @@ def main(argv=None) -> int:
             'decision_step_p95_ms_persistent_20k': round(
                 float(np.percentile(persistent_samples, 95)), 3),
             'decision_step_p95_ms_persistent_20k_track': round(
-                float(np.percentile(tracking, 95)), 3)}))
+                float(np.percentile(tracking, 95)), 3),
+            'decision_step_p95_ms_persistent_20k_hypot': round(
+                float(np.percentile(hypot_samples, 95)), 3)}))
     return 0
 
 

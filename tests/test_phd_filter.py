@@ -52,9 +52,9 @@ def test_gating_computes_likelihoods_only_inside(monkeypatch):
     seen = []
     original = sensor_model.log_likelihood
 
-    def spy(z, points, pose, sensor, bandwidth):
+    def spy(z, points, pose, sensor, bandwidth, norm):
         seen.append(len(points))
-        return original(z, points, pose, sensor, bandwidth)
+        return original(z, points, pose, sensor, bandwidth, norm)
 
     monkeypatch.setattr(sensor_model, 'log_likelihood', spy)
     rng = np.random.default_rng(2)

@@ -11,8 +11,8 @@ from sat_agent.config import SatParams
 from sat_agent.phd_filter import ParticlePHD, update_weights
 from sat_agent.search_density import Lattice, SearchDensity
 from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
-from sat_agent.tracking_control import (predicted_ideal_measurements, renyi_divergence,
-                                        TrackingControl)
+from sat_agent.tracking_control import (predicted_ideal_measurements, pseudo_update_score,
+                                        renyi_divergence, TrackingControl)
 
 PARAMS = SatParams()
 CONTROL = TrackingControl(PARAMS)
@@ -101,8 +101,8 @@ KERNEL = PARAMS.with_overrides({'additions.kernel_likelihood': True})
 def test_score_equals_divergence_of_a_full_pseudo_update(params):
     """Scoring only the particles near the agent, then inside each square, changes no score.
 
-    Bit for bit: the scores decide the action, and the evaluation's figures are reproduced. The
-    pseudo-update uses the filter's g (with kernel_likelihood, the kernel's).
+    Bit for bit with the control's norm (sensor_model.plain_hypot): the scores decide the
+    action. The pseudo-update uses the filter's g (with kernel_likelihood, the kernel's).
     """
     rng = np.random.default_rng(3)
     states = np.zeros((3000, 4))
@@ -115,9 +115,41 @@ def test_score_equals_divergence_of_a_full_pseudo_update(params):
     for action, pose in enumerate(actions.candidate_poses(POSE, PARAMS.actions)):
         z = predicted_ideal_measurements(estimate, pose, SENSOR)
         full = update_weights(predicted.states, predicted.weights, z, pose, SENSOR,
-                              bandwidth=bandwidth)
+                              bandwidth=bandwidth, norm=sensor_model.plain_hypot)
         assert scores[action] == renyi_divergence(predicted.weights, full, 0.5)
     assert (bandwidth > 0) == np.any(scores != CONTROL.action(predicted, estimate, POSE)[1])
+
+
+@pytest.mark.parametrize('seed', range(20))
+def test_the_controls_norm_ranks_actions_as_the_filters_exact_one(seed):
+    """plain_hypot's scores are the exact norm's to 1e-12 and rank the same action first."""
+    rng = np.random.default_rng(seed)
+    target = POSE + rng.uniform(-4.0, 4.0, 2)
+    predicted = _cloud(target, count=int(rng.integers(200, 5000)), spread=rng.uniform(0.2, 2.0),
+                       seed=seed)
+    estimate = _estimate(target)
+    poses = actions.candidate_poses(POSE, PARAMS.actions)
+    points = predicted.states[:, [0, 2]]
+    for params in (PARAMS, KERNEL):
+        bandwidth = filter_bandwidth(params)
+        plain, exact = (np.array([pseudo_update_score(points, predicted.weights, estimate, pose,
+                                                      SENSOR, 0.5, bandwidth, norm)
+                                  for pose in poses])
+                        for norm in (sensor_model.plain_hypot, np.hypot))
+        np.testing.assert_allclose(plain, exact, rtol=1e-12, atol=0.0)
+        assert np.argmax(plain) == np.argmax(exact)
+        scores = TrackingControl(params).action(predicted, estimate, POSE)[1]
+        np.testing.assert_array_equal(scores[np.isfinite(scores)], plain[np.isfinite(scores)])
+
+
+# Metres, radians and sigmas: no square underflows (plain_hypot's docstring).
+PHYSICAL = st.floats(-1e3, 1e3).filter(lambda x: x == 0.0 or abs(x) > 1e-100)
+
+
+@given(PHYSICAL, PHYSICAL)
+def test_plain_hypot_is_hypot_within_a_few_ulps(a, b):
+    assert sensor_model.plain_hypot(np.float64(a), np.float64(b)) == pytest.approx(
+        np.hypot(a, b), rel=4 * np.finfo(float).eps, abs=1e-300)
 
 
 def test_track_standoff_switch_keeps_the_target_at_the_stand_off_or_takes_the_pure_argmax():

@@ -82,7 +82,7 @@ class ParticlePHD:
 
 def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
                    sensor: SensorParams, explained: Optional[np.ndarray] = None,
-                   bandwidth: float = 0.0) -> np.ndarray:
+                   bandwidth: float = 0.0, norm=np.hypot) -> np.ndarray:
     """Return the corrected weights of Eqn. satphd_correct (true-target part).
 
     w_i <- [1 - p_D(x_i) + sum_z p_D(x_i) g(z | x_i) / (kappa(z) + tau(z))] w_i,
@@ -93,19 +93,20 @@ def update_weights(states: np.ndarray, weights: np.ndarray, measurements: np.nda
 
     explained: optional (M,) output array, filled with tau(z) / (kappa(z) + tau(z)), the share
     of each measurement the predicted targets explain (0 when no particle is in the square).
-    bandwidth: g's kernel spread (sensor_model.log_likelihood; 0: the sensor's own g).
+    bandwidth: g's kernel spread (sensor_model.log_likelihood; 0: the sensor's own g); norm:
+    the distances' (sensor_model.log_likelihood).
     """
     new_weights = np.array(weights, dtype=float, copy=True)
     points = motion_model.positions(states)
     inside = np.flatnonzero(sensor_model.in_sensing_square(points, pose, sensor.square_side))
     new_weights[inside] *= detection_factors(points[inside], new_weights[inside], measurements,
-                                             pose, sensor, explained, bandwidth)
+                                             pose, sensor, explained, bandwidth, norm)
     return new_weights
 
 
 def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.ndarray, pose,
                       sensor: SensorParams, explained: Optional[np.ndarray] = None,
-                      bandwidth: float = 0.0) -> np.ndarray:
+                      bandwidth: float = 0.0, norm=np.hypot) -> np.ndarray:
     """Return the factors 1 - p_D + sum_z p_D g / (kappa + tau) of particles inside the square.
 
     points and weights: the (N, 2) positions and weights of the particles inside S_a(pose),
@@ -114,7 +115,7 @@ def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.
     values far below float range do not underflow to 0 / 0. When kappa = 0 and no particle can
     have produced z (tau(z) = 0) the term is 0 / 0; it is taken as 0: z then says nothing about
     the existing particles (the measurement-driven birth accounts for it). explained and
-    bandwidth: as in ``update_weights``.
+    bandwidth: as in ``update_weights``; norm: as in sensor_model.log_likelihood.
     """
     if explained is not None:
         explained[:] = 0.0
@@ -122,7 +123,7 @@ def detection_factors(points: np.ndarray, weights: np.ndarray, measurements: np.
     z = np.asarray(measurements, dtype=float).reshape(-1, 2)
     if not len(z) or not len(points):
         return np.full(len(points), 1.0 - p_d)
-    log_g = sensor_model.log_likelihood(z, points, pose, sensor, bandwidth)
+    log_g = sensor_model.log_likelihood(z, points, pose, sensor, bandwidth, norm)
     peak = log_g.max(axis=0)                    # (M,) scale per measurement
     np.subtract(log_g, peak, out=log_g)
     g_scaled = np.exp(log_g, out=log_g)         # g / exp(peak), in (0, 1]

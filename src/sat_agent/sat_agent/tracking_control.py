@@ -16,8 +16,14 @@ in particle form (both densities share the particles, D_hat = f D):
     xi(u) = sum w + alpha / (1 - alpha) sum w_hat - 1 / (1 - alpha) sum w^(1 - alpha) w_hat^alpha.
 
 The paper's control is the argmax of xi over the admissible actions (``every_action``,
-``best_score``). The addition ``additions.track_standoff`` limits the argmax to the actions
-keeping the targets at a stand-off inside the square (beyond_paper/track_standoff.py);
+``best_score``). Its pseudo updates' distances and kernel sigmas take
+``sensor_model.plain_hypot`` (``TrackingControl.norm``) instead of the filter's np.hypot:
+within a few ulps, so the scores rank the actions as the exact ones do but for ties within
+~1e-15 of a score, and a pseudo update costs up to ~40 % less (the control is most of a TRACK
+step: scripts/bench_filter.py times both; session 38 found the same runs, bit for bit, over
+190 runs of the evaluation's cells). The addition ``additions.track_standoff`` limits the
+argmax to the actions keeping the targets at a stand-off inside the square
+(beyond_paper/track_standoff.py);
 ``additions.search_while_tracking`` takes, among the actions within a bounded loss of the best
 score, the one covering the most search worth (beyond_paper/search_while_tracking.py). Both are
 chosen once, in ``TrackingControl``.
@@ -62,18 +68,20 @@ def renyi_divergence(predicted_weights: np.ndarray, posterior_weights: np.ndarra
 
 
 def pseudo_update_score(points: np.ndarray, weights: np.ndarray, estimates: MultiTargetEstimate,
-                        pose, sensor: SensorParams, alpha: float, bandwidth: float = 0.0) -> float:
+                        pose, sensor: SensorParams, alpha: float, bandwidth: float = 0.0,
+                        norm=np.hypot) -> float:
     """Return xi(u) for the action putting the agent at pose (pseudo update, Renyi divergence).
 
     points, weights: the predicted particles. Particles outside S_a(pose) keep their weight
     and add exactly 0 (``renyi_divergence``), so only those inside are updated and summed: the
-    same score, bit for bit, as the divergence over the whole set after ``update_weights``.
-    bandwidth: the filter's g (phd_filter.update_weights).
+    same score, bit for bit, as the divergence over the whole set after ``update_weights``
+    with the same norm (TrackingControl's: module docstring). bandwidth: the filter's g.
     """
     inside = np.flatnonzero(sensor_model.in_sensing_square(points, pose, sensor.square_side))
     w = weights[inside]
     z = predicted_ideal_measurements(estimates, pose, sensor)
-    factors = detection_factors(points[inside], w, z, pose, sensor, bandwidth=bandwidth)
+    factors = detection_factors(points[inside], w, z, pose, sensor, bandwidth=bandwidth,
+                                norm=norm)
     return renyi_divergence(w, w * factors, alpha)
 
 
@@ -98,6 +106,9 @@ class TrackingControl:
         self._choose = (SearchWhileTracking(params.cooperation.track_search_tolerance)
                         if additions.search_while_tracking else best_score)
         self._bandwidth = filter_bandwidth(params)   # the filter's g (kernel_likelihood)
+        # The pseudo updates' norm (module docstring); scripts/bench_filter.py sets np.hypot
+        # to time the control as it was.
+        self.norm = sensor_model.plain_hypot
 
     def action(self, predicted: ParticlePHD, estimates: MultiTargetEstimate, pose,
                search: Optional[SearchDensity] = None):
@@ -124,6 +135,6 @@ class TrackingControl:
         scores = np.full(len(poses), -np.inf)
         for action in np.flatnonzero(allowed):
             scores[action] = pseudo_update_score(points, weights, estimates, poses[action],
-                                                 sensor, alpha, self._bandwidth)
+                                                 sensor, alpha, self._bandwidth, self.norm)
         candidates = preferred if preferred.any() else allowed
         return self._choose(scores, candidates, poses, search), scores

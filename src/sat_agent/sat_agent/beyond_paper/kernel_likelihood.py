@@ -27,7 +27,10 @@ def filter_bandwidth(params: SatParams) -> float:
     return params.sensor.likelihood_bandwidth if params.additions.kernel_likelihood else 0.0
 
 
-def kernel_sigmas(sigma_range, sigma_bearing, distance, bandwidth: float):
-    """Return (sigma_r, sigma_b) of the kernel's likelihood at these distances (docstring)."""
-    return (np.hypot(sigma_range, bandwidth),
-            np.hypot(sigma_bearing, bandwidth / np.maximum(distance, bandwidth)))
+def kernel_sigmas(sigma_range, sigma_bearing, distance, bandwidth: float, norm=np.hypot):
+    """Return (sigma_r, sigma_b) of the kernel's likelihood at these distances (docstring).
+
+    norm: sqrt(a^2 + b^2), as sensor_model.log_likelihood takes it.
+    """
+    return (norm(sigma_range, bandwidth),
+            norm(sigma_bearing, bandwidth / np.maximum(distance, bandwidth)))
