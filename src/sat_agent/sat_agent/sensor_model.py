@@ -61,7 +61,7 @@ def plain_hypot(a, b):
 
     np.hypot (libm's, within an ulp) is the default of every norm here, so a run's figures are
     the same bit for bit; the tracking control takes this one (tracking_control.py), since
-    its pseudo updates only rank actions and hypot is most of their cost. No overflow for the
+    its pseudo updates only rank actions and hypot is a third of their cost. No overflow for the
     metres, radians and sigmas it meets.
     """
     return np.sqrt(np.square(a) + np.square(b))
