@@ -309,14 +309,20 @@ def main(argv=None) -> int:
                                                  max_particles=20000))
     timed = decision_step_ms(persistent, norms=(None, np.hypot))
     persistent_samples, persistent_modes = timed[None]
-    print_decision_step('config/persistent.yaml, 20k particles', *timed[None])
-    print_decision_step('the same, the tracking control with np.hypot', *timed[np.hypot])
     hypot_samples, hypot_modes = timed[np.hypot]
+    print_decision_step('config/persistent.yaml, 20k particles', persistent_samples,
+                        persistent_modes)
+    print_decision_step('the same, the tracking control with np.hypot', hypot_samples,
+                        hypot_modes)
     tracking = persistent_modes.get('TRACK', np.array([np.nan]))
-    if 'TRACK' in persistent_modes:
+    # The steps pair up only while both norms choose every action alike (tracking_control.py).
+    hypot_tracking = hypot_modes.get('TRACK', np.zeros(0))
+    if 'TRACK' in persistent_modes and len(hypot_tracking) == len(tracking):
         print(f'  TRACK steps, paired (the same steps): median ratio np.hypot / own '
-              f'x{np.median(hypot_modes["TRACK"] / tracking):.2f}; p95 of all steps '
+              f'x{np.median(hypot_tracking / tracking):.2f}; p95 of all steps '
               f'x{np.percentile(hypot_samples, 95) / np.percentile(persistent_samples, 95):.2f}')
+    else:
+        print('  no paired ratio: the two norms did not run the same TRACK steps')
     if args.json:
         main_row = next(r for r in rows if r['particles'] == 20000 and r['layout'] == 'tracking')
         print(json.dumps({
