@@ -1,11 +1,13 @@
 """Radio messages parsed from their serialized bytes, once per distinct message (composed mode)."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
 
 from sat_agent.agent_core import Agent, REPORT_KINDS
-from sat_agent.config import SatParams
+from sat_agent.config import load_params_file, SatParams
 from sat_agent.message_auth import (BLOCK_BYTES, MonotonicCounter, Signer, StepWindow,
                                     WORLD_SENDER)
 from sat_agent.ros.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
@@ -13,12 +15,16 @@ from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.signed_io import VerifiedInput
 
 PARAMS = SatParams()
+CONFIG = Path(__file__).resolve().parent.parent / 'config'
 
 
-@pytest.fixture(scope='module')
-def report_bytes():
-    """Return one agent's report after a few steps and its three serialized radio messages."""
-    agent = Agent(1, PARAMS, (50.0, 50.0), seed=3)
+@pytest.fixture(scope='module', params=['paper', 'persistent'])
+def report_bytes(request):
+    """Return one agent's report after a few steps and its three serialized radio messages.
+
+    Both profiles: the persistent one's density travels in the other layout (density_codec.py).
+    """
+    agent = Agent(1, load_params_file(CONFIG / f'{request.param}.yaml'), (50.0, 50.0), seed=3)
     rng = np.random.default_rng(3)
     for k in range(1, 4):
         output = agent.step(k, (50.0, 50.0 + k), rng.uniform((0, -3), (7, 3), (4, 2)), [])

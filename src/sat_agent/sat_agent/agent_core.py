@@ -66,7 +66,7 @@ from sat_agent.beyond_paper.track_coasting import NoCoasting, TrackCoasting
 from sat_agent.beyond_paper.track_release import TrackRelease
 from sat_agent.beyond_paper.track_revisit import NoRevisit, TrackRevisit
 from sat_agent.config import ParameterError, SatParams
-from sat_agent.density_codec import encode_density
+from sat_agent.density_codec import encode_density, PATCHES
 from sat_agent.mode_machine import Mode, ModeMachine
 from sat_agent.parameter_schema import changed_names, live_names
 from sat_agent.phd_filter import BirthSpots, SatPhdFilter
@@ -79,7 +79,7 @@ from sat_agent.tracking_overlap import OverlapMonitor
 
 # Radio accounting: payload bytes of the three messages of a report (what the paper exchanges),
 # without DDS/RTPS overhead. Every message carries agent id and step (uint32 each); the density
-# is its zlib-compressed float32 cells (density_codec.py); the estimate has the pose, the
+# is its compressed float32 cells (density_codec.py); the estimate has the pose, the
 # cardinality (float64) and per target position, velocity (2 float64 each), a 4 x 4 covariance
 # and a weight (float64); the mode message has the mode (uint8) and the pose. The ROS radio
 # counts with the same function.
@@ -112,7 +112,8 @@ class AgentReport:
     """What one agent tells its neighbours at step k: search density, estimate and mode.
 
     agent_id, step and pose are header data; search_values is the (ny, nx) search density
-    (values in [0, 1], search_density.py's convention) after fusion at step k.
+    (values in [0, 1], search_density.py's convention) after fusion at step k; encoding: the
+    radio's layout of it that the sender's density model suits (density_codec.py).
     """
 
     agent_id: int
@@ -121,11 +122,12 @@ class AgentReport:
     mode: Mode
     search_values: np.ndarray
     estimate: MultiTargetEstimate
+    encoding: str = PATCHES
 
     @cached_property
     def encoded_search_values(self) -> bytes:
         """The search density as the radio carries it (density_codec.encode_density)."""
-        return encode_density(self.search_values)
+        return encode_density(self.search_values, self.encoding)
 
     @property
     def nbytes(self) -> int:
@@ -278,7 +280,8 @@ class Agent:
         # The report carries the posterior (fused) density of step k, in float32 as on the wire,
         # so in-process and ROS runs exchange the very same values.
         report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
-                             self.filter.search.values.astype(np.float32), estimate)
+                             self.filter.search.values.astype(np.float32), estimate,
+                             self.filter.search.model.wire_encoding)
         self.filter.predict(pose)
         view = BaselineView(int(step), self.filter.targets, report, tuple(reports))
         action, goal, plan = self._control(mode, pose, estimate, view)

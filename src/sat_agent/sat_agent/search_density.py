@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from sat_agent import density_codec
 from sat_agent.beyond_paper.regrowing_density import expected_undetected, Regrowth
 from sat_agent.config import AreaParams, ParameterError, SatParams
 
@@ -86,6 +87,8 @@ class ConstantDecay:
 
     # Never observed (the paper's initial value).
     initial = 0.0
+    # J^k in equal patches: the radio's float32 layout (density_codec.py).
+    wire_encoding = density_codec.PATCHES
 
     def __init__(self, decay: float):
         self.decay = decay

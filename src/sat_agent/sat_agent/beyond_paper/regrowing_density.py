@@ -83,6 +83,7 @@ import math
 import numpy as np
 from scipy import ndimage, special
 
+from sat_agent import density_codec
 from sat_agent.config import SatParams
 from sat_agent.sensor_model import measurement_sigmas
 
@@ -145,6 +146,8 @@ class Regrowth:
 
     # v_0 = exp(-u_0) with u_0 = 0: the filter's PHD starts empty.
     initial = 1.0
+    # Values within 1e-3 of 1 that differ by a few ulps from cell to cell (density_codec.py).
+    wire_encoding = density_codec.SMOOTH
 
     def __init__(self, params: SatParams, cells: int, spacing: float):
         self.birth = params.phd.birth_rate / cells

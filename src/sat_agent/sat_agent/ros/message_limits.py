@@ -15,6 +15,7 @@ from geometry_msgs.msg import Point
 from rclpy.serialization import serialize_message
 from std_msgs.msg import Header
 
+from sat_agent.density_codec import max_encoded_bytes
 from sat_agent.ros.msg_conversions import MAX_DETECTIONS, MAX_TARGETS
 from sat_agent.search_density import Lattice
 from sat_agent.search_map import SearchMap
@@ -36,11 +37,6 @@ def _size(msg) -> int:
 
 def _header() -> Header:
     return Header(frame_id='x' * MAX_NAME)
-
-
-def _zlib_bound(n: int) -> int:
-    """Return the most bytes zlib can make of n bytes (zlib's compressBound, with its header)."""
-    return n + (n >> 12) + (n >> 14) + (n >> 25) + 13
 
 
 def _estimate() -> MultiTargetEstimate:
@@ -73,7 +69,7 @@ class MessageLimits:
                                       detections=[RangeBearing()] * MAX_DETECTIONS)),
             command=_size(ControlCommand(header=_header())),
             density=_size(SearchDensity(header=_header())) + _PADDING
-            + _zlib_bound(lattice.nx * lattice.ny * 4),
+            + max_encoded_bytes(lattice.nx * lattice.ny),
             estimate=_size(_estimate()),
             mode=_size(AgentMode(header=_header())),
             status=_size(AgentStatus(
