@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from ros_harness import executable, PARAMS, ros_node, spin_until, started, wait_matched
 
-from sat_agent.density_codec import encode_density
+from sat_agent.density_codec import encode_density, ENCODINGS, SMOOTH_TAG
 from sat_msgs.msg import (AgentMode, MeasurementSet, MultiTargetEstimate, RangeBearing,
                           SearchDensity, TargetEstimate)
 
@@ -29,7 +29,7 @@ BATCH = 200          # 50 x 200 = 10,000 messages
 STALE_BY = 10        # older than the agent's window for late reports (MAX_REPORT_LAG)
 RADIO_DEFECTS = ('own_report', 'unknown_sender', 'future_step', 'stale_step')
 DENSITY_DEFECTS = ('nan', 'above_one', 'negative', 'wrong_length', 'grid_mismatch', 'not_zlib',
-                   'zip_bomb')
+                   'zip_bomb', 'smooth_not_zlib', 'smooth_zip_bomb')
 # 40 MB of zeros (1000 densities) in 39 kB: a decoder without a size cap would inflate it all.
 ZIP_BOMB = zlib.compress(bytes(1000 * CELLS * 4), 9)
 ESTIMATE_DEFECTS = ('nan_position', 'inf_weight', 'negative_cardinality', 'too_many_targets')
@@ -39,6 +39,7 @@ SCAN_DEFECTS = ('wrong_agent_id', 'stale_step', 'future_step', 'nan_detection',
 REASON = {'nan': 'out_of_range', 'above_one': 'out_of_range', 'negative': 'out_of_range',
           'wrong_length': 'wrong_length', 'grid_mismatch': 'grid_mismatch',
           'not_zlib': 'bad_encoding', 'zip_bomb': 'wrong_length',
+          'smooth_not_zlib': 'bad_encoding', 'smooth_zip_bomb': 'wrong_length',
           'nan_position': 'non_finite', 'inf_weight': 'non_finite',
           'negative_cardinality': 'out_of_range', 'too_many_targets': 'too_many_targets',
           'unknown_mode': 'unknown_mode', 'nan_detection': 'non_finite',
@@ -149,8 +150,14 @@ def density(sender, step, defect, rng):
         values[5] = -0.1
     elif defect == 'wrong_length':
         values = values[:-1]
-    encoded = {'not_zlib': b'\x78\x9c not zlib', 'zip_bomb': ZIP_BOMB}.get(
-        defect, encode_density(values))
+    # Either radio layout (density_codec.py): the smooth one takes rows x columns.
+    encoding = ENCODINGS[int(rng.integers(len(ENCODINGS)))]
+    rows = values.reshape(100, 100) if values.size == CELLS else values.reshape(1, -1)
+    not_zlib = b'\x78\x9c not zlib'
+    encoded = {'not_zlib': not_zlib, 'zip_bomb': ZIP_BOMB,
+               'smooth_not_zlib': SMOOTH_TAG + not_zlib,
+               'smooth_zip_bomb': SMOOTH_TAG + ZIP_BOMB}.get(
+        defect, encode_density(rows, encoding))
     msg = SearchDensity(agent_id=sender, step=step, values_zlib=array('B', encoded))
     msg.grid.resolution = 2.0 if defect == 'grid_mismatch' else 1.0
     msg.grid.width, msg.grid.height = 100, 100

@@ -19,7 +19,7 @@ import pytest
 from ros_harness import (announce, executable, PARAMS, ros_node, spin_until, started,
                          write_scenario)
 
-from sat_agent.density_codec import encode_density
+from sat_agent.density_codec import encode_density, SMOOTH, SMOOTH_TAG
 from sat_agent.ros.qos import RADIO, STEP
 from sat_msgs.msg import (AgentMode, ControlCommand, MeasurementSet, MultiTargetEstimate,
                           SearchDensity, TargetEstimate)
@@ -35,12 +35,14 @@ KINDS = {'search_density': SearchDensity, 'estimate': MultiTargetEstimate, 'mode
 DEFECTS = {
     'cmd': ('wrong_agent_id', 'stale_step', 'future_step', 'duplicate'),
     'search_density': ('wrong_agent_id', 'stale_step', 'future_step', 'nan', 'wrong_length',
-                       'grid_mismatch', 'above_one', 'not_zlib', 'zip_bomb'),
+                       'grid_mismatch', 'above_one', 'not_zlib', 'zip_bomb', 'smooth_nan',
+                       'smooth_zip_bomb'),
     'estimate': ('wrong_agent_id', 'future_step', 'nan_position', 'negative_cardinality'),
     'mode': ('wrong_agent_id', 'stale_step', 'unknown_mode'),
 }
 REASON = {'nan': 'out_of_range', 'above_one': 'out_of_range', 'wrong_length': 'wrong_length',
           'not_zlib': 'bad_encoding', 'zip_bomb': 'wrong_length',
+          'smooth_nan': 'out_of_range', 'smooth_zip_bomb': 'wrong_length',
           'grid_mismatch': 'grid_mismatch', 'nan_position': 'non_finite',
           'negative_cardinality': 'out_of_range', 'unknown_mode': 'unknown_mode'}
 recipe = st.tuples(st.sampled_from((1, 2)), st.sampled_from(sorted(DEFECTS))).flatmap(
@@ -56,9 +58,13 @@ def message(topic, agent, step, defect):
         return ControlCommand(agent_id=sender, step=max(step, 0), action_index=0)
     if topic == 'search_density':
         values = np.zeros(CELLS - (defect == 'wrong_length'), dtype=np.float32)
-        values[0] = {'nan': math.nan, 'above_one': 2.0}.get(defect, 0.0)
-        encoded = {'not_zlib': b'\x00 not zlib', 'zip_bomb': ZIP_BOMB}.get(
-            defect, encode_density(values))
+        values[0] = {'nan': math.nan, 'smooth_nan': math.nan, 'above_one': 2.0}.get(defect, 0.0)
+        if defect == 'smooth_nan':   # the other radio layout (density_codec.py)
+            encoded = encode_density(values.reshape(100, 100), SMOOTH)
+        else:
+            encoded = {'not_zlib': b'\x00 not zlib', 'zip_bomb': ZIP_BOMB,
+                       'smooth_zip_bomb': SMOOTH_TAG + ZIP_BOMB}.get(defect,
+                                                                     encode_density(values))
         msg = SearchDensity(agent_id=sender, step=max(step, 0), values_zlib=array('B', encoded))
         msg.grid.resolution = 3.0 if defect == 'grid_mismatch' else 1.0
         msg.grid.width = msg.grid.height = 100
