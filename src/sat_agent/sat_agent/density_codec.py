@@ -16,7 +16,7 @@ beyond_paper/regrowing_density.Regrowth):
 - ``SMOOTH``: the tag byte ``SMOOTH_TAG`` (low nibble not 8, so never a zlib header), then zlib
   of the values' bits rearranged. The regrowing density is v = exp(-u) with u ~ 1e-6 per cell
   and step: values within 1e-3 of 1 that change by a few ulps from cell to cell, so few float32
-  values repeat and zlib kept the PATCHES layout only ~2.7 times smaller at ~6 ms a message.
+  values repeat and zlib kept the PATCHES layout only ~2.7 times smaller at 3-6 ms a message.
   Each value is taken as its distance in ulps below 1.0 (0x3F800000 minus its bits, modulo
   2^32: exact for every bit pattern), each row as its difference to the row above (modulo
   2^32, zig-zag so that small steps either way are small numbers), and the four byte planes
