@@ -321,7 +321,7 @@ class Agent:
             if revisit is not None:
                 look, goal = replace(look, keep=revisit.keep), revisit.goal
         if look.keep is not None:
-            action = keep_in_view_action(pose, goal, self.params, look.keep)
+            action = keep_in_view_action(pose, goal, self.params, look.keep, look.full_speed)
         return action, goal, plan
 
     def _valid_reports(self, step: int, inbox: Sequence[AgentReport],

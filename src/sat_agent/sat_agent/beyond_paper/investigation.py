@@ -56,6 +56,7 @@ class Look:
 
     peaks: Optional[MultiTargetEstimate] = None
     keep: Optional[np.ndarray] = None
+    full_speed: bool = False   # keep only with a move as long as the walk's (search.spot_move)
 
 
 NO_LOOK = Look()
@@ -80,9 +81,10 @@ class Investigation:
             self._investigated = 0
             return NO_LOOK
         fresh = self._fresh(estimate.tentative)
+        faded = not fresh and self._investigated > 0 and not self._keeping_in_view
         if fresh:
             look = (max(fresh, key=lambda t: t.weight),)   # the heaviest spot first
-        elif self._investigated > 0 and not self._keeping_in_view:
+        elif faded:
             look = self._look      # a peak that faded for a scan: keep it in view one step
         else:
             self._investigated = 0
@@ -99,7 +101,10 @@ class Investigation:
         self._look = tuple(replace(t, position=t.position + dt * t.velocity) for t in look)
         ahead = MultiTargetEstimate(self._look, 0.0)
         keep = self._keeping_in_view or self.params.search.peak_look == 'keep'
-        return Look(keep=ahead.positions()) if keep else Look(peaks=ahead)
+        spot = not fresh and not faded
+        return (Look(keep=ahead.positions(),
+                     full_speed=spot and self.params.search.spot_move == 'full')
+                if keep else Look(peaks=ahead))
 
     def _fresh(self, spots: Sequence[TargetEstimate]) -> tuple:
         """Return the spots farther than phd.continue_gate from every abandoned spot."""
@@ -116,19 +121,26 @@ class Investigation:
                                     float(spots.masses[i])) for i in order)
 
 
-def keep_in_view_action(pose, goal, params: SatParams, keep: np.ndarray) -> int:
+def keep_in_view_action(pose, goal, params: SatParams, keep: np.ndarray,
+                        full_speed: bool = False) -> int:
     """Return the search control's action (search_planning.search_action) keeping points in view.
 
     keep: (K, 2) points, most wanted first, the next sensing square must hold at least
     ``cooperation.track_edge_margin`` inside its edges (a newborn's measurement is off by
     sigma_r ~ 1 m): the moves kept are those holding the longest run of them from the first
     that some admissible action holds; when none holds the first, no limit. Ties go to the
-    lowest action index.
+    lowest action index. full_speed: only the moves as long as the search control's own
+    (``search.spot_move`` 'full'), so keeping a point never slows the walk.
     """
     pose = np.asarray(pose, dtype=float).reshape(2)
     poses = candidate_poses(pose, params.actions)
     distances = action_costs(pose, goal, params)
     allowed = admissible_mask(pose, params.actions, params.area)
+    if full_speed:   # the control's own move is among the kept ones, so some cost is finite
+        lengths = np.hypot(*(poses - pose).T)
+        slower = lengths < lengths[np.argmin(distances)] - 1e-9
+        distances[slower] = np.inf
+        allowed &= ~slower
     points = np.asarray(keep, dtype=float).reshape(-1, 2)
     inner = params.sensor.square_side - 2.0 * params.cooperation.track_edge_margin
     holding = in_sensing_square(points[None, :, :], poses[:, None, :], inner)
