@@ -247,6 +247,32 @@ def test_keep_in_view_action_holds_the_longest_run_of_points_from_the_first():
     np.testing.assert_allclose(lands([far, first]), [50.0, 54.0])
 
 
+def test_keep_in_view_action_at_full_speed_steers_the_walk_but_never_slows_it():
+    params = SatParams()
+    pose, goal = (50.0, 50.0), (50.0, 60.0)
+    poses = candidate_poses(pose, params.actions)
+    walk = search_action(pose, goal, params)
+    first, second = [47.0, 50.0], [53.0, 52.0]
+
+    def lands(keep, full_speed=True):
+        return poses[keep_in_view_action(pose, goal, params, np.array(keep), full_speed)]
+    # Held by a 4 m move (north-west), the first is kept as before: the walk only turns.
+    np.testing.assert_allclose(lands([first]), lands([first], full_speed=False))
+    # Both are held only by the 2 m step north; at full speed the run is the first alone.
+    np.testing.assert_allclose(lands([first, second], full_speed=False), [50.0, 52.0])
+    np.testing.assert_allclose(lands([first, second]), lands([first]))
+    # A point 3 m behind an agent flying east: of the moves holding it standing is the nearest
+    # to the goal; at full speed it is 4 m north-west (the turn, not the pace, pays for it).
+    behind = np.array([[47.0, 50.0]])
+    east = (60.0, 50.0)
+    assert keep_in_view_action(pose, east, params, behind) == 0
+    np.testing.assert_allclose(poses[keep_in_view_action(pose, east, params, behind, True)],
+                               [50.0 - 2.0 * 2 ** 0.5, 50.0 + 2.0 * 2 ** 0.5])
+    for keep in ([first], [first, second], [[90.0, 90.0]]):
+        step = lands(keep) - np.asarray(pose)
+        assert np.hypot(*step) == pytest.approx(np.hypot(*(poses[walk] - np.asarray(pose))))
+
+
 def test_searching_agent_keeps_a_spot_seen_once_in_its_next_square_then_resumes_its_walk():
     # The paper reading of the clutter: one measurement 4 m from the agent seeds 0.28 of birth
     # mass, above phd.tentative_threshold.

@@ -120,3 +120,20 @@ def test_nothing_is_looked_at_while_tracking_or_in_the_rejoin_cooldown():
     for mode, cooldown in ((Mode.TRACK, 0), (Mode.SEARCH, 3)):
         result = Investigation(params).look(mode, seen, cooldown, spots((50.0, 50.0), 0.4))
         assert result.peaks is None and result.keep is None
+
+
+def test_with_spot_move_full_only_newborn_spots_are_kept_at_full_speed():
+    params = SatParams().with_overrides({'search.spot_move': 'full'})
+    assert not Investigation(SatParams()).look(
+        Mode.SEARCH, NOTHING, 0, spots((30.0, 40.0), 0.4)).full_speed
+    assert Investigation(params).look(Mode.SEARCH, NOTHING, 0, spots((30.0, 40.0), 0.4)).full_speed
+    # A peak that fades for a scan is likelier a target: any move may keep it.
+    look = Investigation(params)
+    look.look(Mode.SEARCH, tentative(peak((50.0, 50.0))), 0, BirthSpots.empty())
+    faded = look.look(Mode.SEARCH, NOTHING, 0, spots((20.0, 20.0), 0.4))
+    np.testing.assert_allclose(faded.keep, [[50.0, 50.0]])
+    assert not faded.full_speed
+    # With peak_look 'keep' a tentative peak is kept by any move too.
+    peaks = params.with_overrides({'search.peak_look': 'keep'})
+    assert not Investigation(peaks).look(Mode.SEARCH, tentative(peak((50.0, 50.0))), 0,
+                                         BirthSpots.empty()).full_speed

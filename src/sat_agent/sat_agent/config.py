@@ -323,13 +323,14 @@ class SearchParams:
         'track', 'additions.investigation: how a searching agent looks at a tentative peak: '
         "'track' holds its walk and places itself with the tracking control, 'keep' keeps the "
         'peak in its next square with the search move', choices=PEAK_LOOKS)
-    # 'any' is the addition as first measured. Session 40 (persistent profile, dev seeds
-    # 9751-9770): a kept spot slowed the walk to 3.0 m/step on 18 % of the searching steps, and
-    # 1.5 % of the spots kept by a slower move had a target within 3 m (4 % at full speed).
+    # 'any' is the addition as first measured. Session 40 (persistent profile): kept spots
+    # slowed the walk to 3.0 m/step on 18 % of the searching steps, but 'full' (rule 21, random,
+    # fresh dev seeds 9851-10150, paired) detected -0.8, tracked -1.0 points, OSPA +0.05 m,
+    # none significant: not kept (docs/persistent_trials.md).
     spot_move: str = param(
         'any', 'additions.investigation: the search move that keeps a newborn spot in view: '
-        "'any' admissible move, 'full' only a move as long as the walk's (the walk never slows "
-        'down for a spot)', choices=SPOT_MOVES)
+        "'any' admissible move, 'full' only a move as long as the walk's (the walk may turn "
+        'for a spot but never slows down or stands)', choices=SPOT_MOVES)
     # Follows the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
     replan_period: int = param(
         10, 'additions.persistent_planning: every agent in SEARCH replans (jointly with the '

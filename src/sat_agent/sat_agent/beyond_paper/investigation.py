@@ -13,7 +13,8 @@ tentative peak, the heaviest newborn spot of this scan (a measurement seeding at
 that keeps the spot ``cooperation.track_edge_margin`` inside the next square
 (``keep_in_view_action``; ``search.look_spots`` > 1 keeps as many of the heaviest as one move can
 hold, ``search.look_spot_share`` < 1 lowers the bar, both measured and left at 1 in session 23,
-README issue 15): a real target is then a tentative peak at the next scan, a false alarm leaves
+README issue 15; ``search.spot_move`` 'full' keeps it only by a move as long as the walk's,
+measured and left at 'any' in session 40): a real target is then a tentative peak at the next scan, a false alarm leaves
 nothing and the walk resumes at once. With ``search.peak_look`` 'keep' a tentative peak is looked
 at the same way, by the search move that keeps it in the next square, for up to its budget: the
 walk advances while the peak is scanned (session 37). Nothing is looked at during the rejoin
@@ -130,7 +131,7 @@ def keep_in_view_action(pose, goal, params: SatParams, keep: np.ndarray,
     sigma_r ~ 1 m): the moves kept are those holding the longest run of them from the first
     that some admissible action holds; when none holds the first, no limit. Ties go to the
     lowest action index. full_speed: only the moves as long as the search control's own
-    (``search.spot_move`` 'full'), so keeping a point never slows the walk.
+    (``search.spot_move`` 'full'), so keeping a point may turn the walk but never slows it.
     """
     pose = np.asarray(pose, dtype=float).reshape(2)
     poses = candidate_poses(pose, params.actions)
