@@ -44,7 +44,7 @@ import os
 from pathlib import Path
 import sys
 import time
-from typing import Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 import numpy as np
 from tqdm import tqdm
@@ -85,14 +85,19 @@ METRIC_WORDS = ('ospa', 'time', 'pct', 'detect', 'bytes', 'msgs', 'steps', 'trac
 SINGLE_THREAD = dict.fromkeys(('OMP_NUM_THREADS', 'OPENBLAS_NUM_THREADS', 'MKL_NUM_THREADS'), '1')
 
 
-def run_one(cell: Cell, seed: int, params: SatParams, paper: Scenario) -> dict:
-    """Run one seed of one cell; return its CSV row, per-target rows and time series."""
+def run_one(cell: Cell, seed: int, params: SatParams, paper: Scenario,
+            swarm: Callable = run_swarm) -> dict:
+    """Run one seed of one cell; return its CSV row, per-target rows and time series.
+
+    swarm(scenario, params) -> SwarmRun runs the cells that are not oracles (a diagnostic may
+    pass a variant of run_swarm, e.g. look_oracle.run_with_oracle_looks).
+    """
     started = time.process_time()
     scenario = scenario_for(cell, seed, params, paper)
     if cell.is_oracle:
         run = run_oracle_sweep(scenario, params, follow=cell.policy == ORACLE_TRACK)
     else:
-        run = run_swarm(scenario, params)
+        run = swarm(scenario, params)
     metrics = compute_metrics(run.records, scenario.name, seed)
     steps = metrics['steps']
     summary = dict(metrics['summary'], wall_time_s=run.seconds,
@@ -203,14 +208,14 @@ def executor(scheduler: Optional[str], jobs: int) -> Iterator:
 
 def run_study(jobs_list: Sequence[Tuple[Cell, SatParams]], seeds: Sequence[int],
               paper: Scenario, jobs: int, scheduler: Optional[str] = None, cost=None,
-              progress: bool = True) -> List[dict]:
-    """Run every (cell, seed) on the executor; results in cell then seed order."""
+              progress: bool = True, swarm: Callable = run_swarm) -> List[dict]:
+    """Run every (cell, seed) on the executor; results in cell then seed order (swarm: run_one)."""
     work = [(cell, params, seed) for cell, params in jobs_list for seed in seeds]
     if cost is not None:
         work.sort(key=lambda job: -(cost(job[0]) or 0.0))
     results = []
     with executor(scheduler, jobs) as pool:
-        futures = [pool.submit(run_one, cell, seed, params, paper)
+        futures = [pool.submit(run_one, cell, seed, params, paper, swarm)
                    for cell, params, seed in work]
         for future in tqdm(as_completed(futures), total=len(futures), disable=not progress,
                            desc='runs', unit='run'):

@@ -1,0 +1,119 @@
+"""The look-triage oracle: the looks see only candidates near a true target, nothing else moves."""
+
+from dataclasses import replace
+from pathlib import Path
+import runpy
+
+import numpy as np
+import pytest
+
+from sat_agent.config import load_params_file
+from sat_agent.phd_filter import BirthSpots
+from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
+from sat_world_sim.evaluate import read_rows
+from sat_world_sim.inprocess_swarm import run_swarm
+from sat_world_sim.look_oracle import run_with_oracle_looks, triaged_look, truth_near
+from sat_world_sim.random_scenarios import random_scenario
+
+SCRIPT = runpy.run_path(str(Path(__file__).resolve().parents[1] / 'scripts' / 'look_oracle.py'))
+TRUTH = np.array([[10.0, 10.0], [50.0, 50.0]])
+
+
+def peak(x, y):
+    return TargetEstimate(np.array([x, y]), np.zeros(2), np.eye(4), 0.5)
+
+
+def spots(*points):
+    points = np.array(points, dtype=float).reshape(-1, 2)
+    return BirthSpots(points + 100.0, points, np.linspace(0.3, 0.6, len(points)))
+
+
+def seen_by(kinds, estimate, birth_spots):
+    """Return what the wrapped look receives from the oracle."""
+    got = {}
+
+    def look(mode, estimate, cooldown_left, birth_spots):
+        got.update(estimate=estimate, spots=birth_spots, args=(mode, cooldown_left))
+        return 'looked'
+
+    assert triaged_look(look, lambda: TRUTH, kinds, 3.0)('SEARCH', estimate, 0,
+                                                         birth_spots) == 'looked'
+    assert got['args'] == ('SEARCH', 0)
+    return got['estimate'], got['spots']
+
+
+def test_truth_near_is_within_the_radius_of_some_target():
+    points = np.array([[12.9, 10.0], [13.1, 10.0], [50.0, 47.0], [30.0, 30.0]])
+    np.testing.assert_array_equal(truth_near(points, TRUTH, 3.0), [True, False, True, False])
+    assert truth_near(points, np.zeros((0, 2)), 3.0).tolist() == [False] * 4
+    assert truth_near(np.zeros((0, 2)), TRUTH, 3.0).shape == (0,)
+
+
+def test_the_looks_see_only_the_candidates_of_their_kinds_near_a_target():
+    estimate = MultiTargetEstimate((peak(1.0, 1.0),), 1.0,
+                                   tentative=(peak(11.0, 11.0), peak(30.0, 30.0),
+                                              peak(49.0, 52.0)),
+                                   tentative_streaks=(1, 0, 2))
+    births = spots([10.5, 9.0], [20.0, 20.0], [52.0, 50.0], [0.0, 0.0])
+    both_estimate, both_spots = seen_by(('spots', 'peaks'), estimate, births)
+    assert [p.position.tolist() for p in both_estimate.tentative] == [[11.0, 11.0],
+                                                                      [49.0, 52.0]]
+    assert both_estimate.tentative_streaks == (1, 2)
+    assert both_estimate.targets == estimate.targets      # confirmed targets are not triaged
+    np.testing.assert_array_equal(both_spots.positions, [[10.5, 9.0], [52.0, 50.0]])
+    np.testing.assert_array_equal(both_spots.measurements, both_spots.positions + 100.0)
+    np.testing.assert_allclose(both_spots.masses, [0.3, 0.5])
+    peaks_estimate, peaks_spots = seen_by(('peaks',), estimate, births)
+    assert len(peaks_estimate.tentative) == 2 and peaks_spots is births
+    spots_estimate, spots_spots = seen_by(('spots',), estimate, births)
+    assert spots_estimate is estimate and len(spots_spots.positions) == 2
+    with pytest.raises(ValueError, match="kinds \\['targets'\\]"):
+        triaged_look(lambda *a: None, lambda: TRUTH, ('targets',))
+
+
+def short_run(scenario, params, **oracle):
+    run = (run_with_oracle_looks(scenario, params, **oracle) if oracle
+           else run_swarm(scenario, params))
+    return [(r.agent_poses, r.estimates) for r in run.records]
+
+
+def assert_same_runs(a, b):
+    assert len(a) == len(b)
+    for (poses_a, estimates_a), (poses_b, estimates_b) in zip(a, b):
+        for agent in poses_a:
+            np.testing.assert_array_equal(poses_a[agent], poses_b[agent])
+            np.testing.assert_array_equal(estimates_a[agent], estimates_b[agent])
+
+
+def test_without_triage_the_run_is_the_profiles_bit_for_bit():
+    params = load_params_file('config/persistent.yaml')
+    scenario = random_scenario(6, 4, 50)
+    assert_same_runs(short_run(scenario, params), short_run(scenario, params, kinds=()))
+
+
+def test_without_targets_the_oracle_never_looks_as_a_profile_without_looks():
+    # Clutter seeds spots and peaks; with no target near any, no look is taken, and every
+    # random stream is the profile's: the paths are those of additions.investigation off.
+    params = load_params_file('config/persistent.yaml')
+    scenario = replace(random_scenario(6, 4, 60), targets=(), random_births=None)
+    blind = params.with_overrides({'additions.investigation': False})
+    oracle = short_run(scenario, params, kinds=('spots', 'peaks'))
+    assert_same_runs(short_run(scenario, blind), oracle)
+    plain = short_run(scenario, params)
+    assert any(not np.array_equal(a[0][i], b[0][i]) for a, b in zip(plain, oracle)
+               for i in a[0]), 'the profile looks at the clutter: its paths differ'
+
+
+def test_the_script_pairs_the_profile_with_its_oracle(tmp_path, capsys):
+    main = SCRIPT['main']
+    assert main(['--out', str(tmp_path), '--setting', 'paper_random', '--seeds', '1',
+                 '--first-seed', '3', '--jobs', '1', '--kinds', 'peaks']) == 0
+    rows = read_rows(tmp_path / 'evaluation.csv')
+    assert [r['label'] for r in rows] == ['SAT-PHD persistent',
+                                          'SAT-PHD persistent, oracle looks (peaks)']
+    assert {r['seed'] for r in rows} == {'3'}
+    printed = capsys.readouterr().out
+    assert 'oracle looks (peaks) (B) against the profile (A)' in printed
+    assert '| paper_random | tracked_share |' in printed
+    with pytest.raises(SystemExit):
+        main(['--out', str(tmp_path), '--kinds', 'spots,targets'])
