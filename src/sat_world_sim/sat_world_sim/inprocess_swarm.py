@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 import sys
 import time
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, Optional
 
 import numpy as np
 
@@ -105,9 +105,16 @@ class InProcessSwarm:
         return np.maximum.reduce([agent.filter.search.values for agent in self.agents.values()])
 
 
-def run_swarm(scenario: Scenario, params: SatParams, steps: Optional[int] = None) -> SwarmRun:
-    """Run the scenario for its steps (or `steps`) and return the records."""
+def run_swarm(scenario: Scenario, params: SatParams, steps: Optional[int] = None,
+              prepare: Optional[Callable[[InProcessSwarm], None]] = None) -> SwarmRun:
+    """Run the scenario for its steps (or `steps`) and return the records.
+
+    prepare(swarm), if given, is called once before the first step (a diagnostic's hook, e.g.
+    look_oracle.oracle_looks).
+    """
     swarm = InProcessSwarm(scenario, params)
+    if prepare is not None:
+        prepare(swarm)
     started = time.perf_counter()
     records = [swarm.step() for _ in range(steps or scenario.steps)]
     return SwarmRun(scenario, records, swarm.fused_density(), time.perf_counter() - started)

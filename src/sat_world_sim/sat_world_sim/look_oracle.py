@@ -20,7 +20,7 @@ package: the agents' code is unchanged and never sees the truth outside this dia
 """
 
 from dataclasses import replace
-import time
+from functools import partial
 from typing import Callable, Optional, Sequence
 
 import numpy as np
@@ -29,7 +29,7 @@ from scipy.spatial.distance import cdist
 from sat_agent.config import SatParams
 from sat_agent.phd_filter import BirthSpots
 
-from sat_world_sim.inprocess_swarm import InProcessSwarm, SwarmRun
+from sat_world_sim.inprocess_swarm import InProcessSwarm, run_swarm, SwarmRun
 from sat_world_sim.scenario import Scenario
 
 TRIAGE_KINDS = ('spots', 'peaks')
@@ -65,28 +65,29 @@ def triaged_look(look: Callable, truth_now: Callable[[], np.ndarray],
                                      birth_spots.positions[real], birth_spots.masses[real])
         if 'peaks' in kinds and estimate.tentative:
             real = truth_near([peak.position for peak in estimate.tentative], truth, radius)
-            streaks = estimate.tentative_streaks or (0,) * len(real)
             estimate = replace(
                 estimate, tentative=tuple(p for p, r in zip(estimate.tentative, real) if r),
-                tentative_streaks=tuple(s for s, r in zip(streaks, real) if r))
+                tentative_streaks=tuple(s for s, r in zip(estimate.tentative_streaks, real) if r))
         return look(mode, estimate, cooldown_left, birth_spots)
 
     return look_at_real
+
+
+def oracle_looks(swarm: InProcessSwarm, kinds: Sequence[str] = TRIAGE_KINDS,
+                 radius: float = DEFAULT_RADIUS) -> None:
+    """Give every agent of the swarm triaged looks (run_swarm's prepare hook).
+
+    The agents step after the world's scans and before it moves (InProcessSwarm.step), so the
+    world's truth at a look is that of the scan looked at.
+    """
+    for agent in swarm.agents.values():
+        agent.investigation.look = triaged_look(
+            agent.investigation.look, lambda: swarm.world.truth().positions, kinds, radius)
 
 
 def run_with_oracle_looks(scenario: Scenario, params: SatParams,
                           kinds: Sequence[str] = TRIAGE_KINDS, radius: float = DEFAULT_RADIUS,
                           steps: Optional[int] = None) -> SwarmRun:
     """Run the scenario in-process (inprocess_swarm.run_swarm) with triaged looks."""
-    swarm = InProcessSwarm(scenario, params)
-    truth = {}
-    for agent in swarm.agents.values():
-        agent.investigation.look = triaged_look(agent.investigation.look,
-                                                lambda: truth['now'], kinds, radius)
-    started = time.perf_counter()
-    records = []
-    for _ in range(steps or scenario.steps):
-        # The truth the step's scans are taken of (InProcessSwarm.step scans before it moves).
-        truth['now'] = swarm.world.truth().positions
-        records.append(swarm.step())
-    return SwarmRun(scenario, records, swarm.fused_density(), time.perf_counter() - started)
+    return run_swarm(scenario, params, steps,
+                     prepare=partial(oracle_looks, kinds=kinds, radius=radius))
