@@ -90,7 +90,7 @@ def run_one(cell: Cell, seed: int, params: SatParams, paper: Scenario,
     """Run one seed of one cell; return its CSV row, per-target rows and time series.
 
     swarm(scenario, params) -> SwarmRun runs the cells that are not oracles (a diagnostic may
-    pass a variant of run_swarm, e.g. look_oracle.run_with_oracle_looks).
+    pass a variant of run_swarm, e.g. triage_oracle.run_with_oracle_triage).
     """
     started = time.process_time()
     scenario = scenario_for(cell, seed, params, paper)

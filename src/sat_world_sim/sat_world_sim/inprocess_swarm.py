@@ -110,7 +110,7 @@ def run_swarm(scenario: Scenario, params: SatParams, steps: Optional[int] = None
     """Run the scenario for its steps (or `steps`) and return the records.
 
     prepare(swarm), if given, is called once before the first step (a diagnostic's hook, e.g.
-    look_oracle.oracle_looks).
+    triage_oracle.oracle_triage).
     """
     swarm = InProcessSwarm(scenario, params)
     if prepare is not None:

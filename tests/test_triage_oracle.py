@@ -1,4 +1,4 @@
-"""The look-triage oracle: the looks see only candidates near a true target, nothing else moves."""
+"""The triage oracle: the looks see only candidates near a target, the scans only targets."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -12,10 +12,12 @@ from sat_agent.phd_filter import BirthSpots
 from sat_agent.state_extraction import MultiTargetEstimate, TargetEstimate
 from sat_world_sim.evaluate import read_rows
 from sat_world_sim.inprocess_swarm import run_swarm
-from sat_world_sim.look_oracle import run_with_oracle_looks, triaged_look, truth_near
 from sat_world_sim.random_scenarios import random_scenario
+from sat_world_sim.triage_oracle import oracle_triage, real_scans, run_with_oracle_triage
+from sat_world_sim.triage_oracle import triaged_look, truth_near
+from sat_world_sim.world_model import Scan
 
-SCRIPT = runpy.run_path(str(Path(__file__).resolve().parents[1] / 'scripts' / 'look_oracle.py'))
+SCRIPT = runpy.run_path(str(Path(__file__).resolve().parents[1] / 'scripts' / 'triage_oracle.py'))
 TRUTH = np.array([[10.0, 10.0], [50.0, 50.0]])
 
 
@@ -67,12 +69,13 @@ def test_the_looks_see_only_the_candidates_of_their_kinds_near_a_target():
     assert len(peaks_estimate.tentative) == 2 and peaks_spots is births
     spots_estimate, spots_spots = seen_by(('spots',), estimate, births)
     assert spots_estimate is estimate and len(spots_spots.positions) == 2
-    with pytest.raises(ValueError, match="kinds \\['targets'\\]"):
-        triaged_look(lambda *a: None, lambda: TRUTH, ('targets',))
+    for kinds in (('targets',), ('scans',)):
+        with pytest.raises(ValueError, match=f"kinds \\['{kinds[0]}'\\]"):
+            triaged_look(lambda *a: None, lambda: TRUTH, kinds)
 
 
 def short_run(scenario, params, **oracle):
-    run = (run_with_oracle_looks(scenario, params, **oracle) if oracle
+    run = (run_with_oracle_triage(scenario, params, **oracle) if oracle
            else run_swarm(scenario, params))
     return [(r.agent_poses, r.estimates) for r in run.records]
 
@@ -104,16 +107,88 @@ def test_without_targets_the_oracle_never_looks_as_a_profile_without_looks():
                for i in a[0]), 'the profile looks at the clutter: its paths differ'
 
 
+def test_real_scans_keep_only_the_targets_rows():
+    z = np.arange(10.0).reshape(5, 2)
+    scans = {1: Scan(z, np.array([-1, 3, -1, -1, 7])), 2: Scan(z[:2], np.array([-1, -1]))}
+    cleaned = real_scans(lambda: scans)()
+    np.testing.assert_array_equal(cleaned[1].measurements, z[[1, 4]])
+    np.testing.assert_array_equal(cleaned[1].source_ids, [3, 7])
+    assert cleaned[2].measurements.shape == (0, 2) and len(cleaned[2].source_ids) == 0
+
+
+def test_with_real_scans_the_agents_measure_only_targets():
+    params = load_params_file('config/persistent.yaml')
+    scenario = random_scenario(6, 4, 60)
+    drawn, seen = [], []
+
+    def spy(swarm):
+        world_scans = swarm.world.scan_all
+
+        def scan_all():
+            scans = world_scans()
+            drawn.extend((agent, scan.measurements[scan.source_ids >= 0].copy(),
+                          int(np.sum(scan.source_ids < 0))) for agent, scan in scans.items())
+            return scans
+        swarm.world.scan_all = scan_all
+        oracle_triage(swarm, ('scans',))
+        for agent_id, agent in swarm.agents.items():
+            agent.step = recorded(agent_id, agent.step)
+
+    def recorded(agent_id, step):
+        def stepped(k, pose, measurements, inbox):
+            seen.append((agent_id, np.array(measurements)))
+            return step(k, pose, measurements, inbox)
+        return stepped
+
+    run_swarm(scenario, params, prepare=spy)
+    assert len(seen) == len(drawn) == 4 * 60
+    for (agent, got), (drawn_agent, real, _) in zip(seen, drawn):
+        assert agent == drawn_agent
+        np.testing.assert_array_equal(got.reshape(-1, 2), real)
+    assert sum(len(real) for _, real, _ in drawn) > 0, 'the targets were measured'
+    assert sum(clutter for *_, clutter in drawn) > 100, 'the world drew its clutter'
+
+
+def test_without_targets_real_scans_give_the_run_without_clutter():
+    # With no measurement kappa never enters the update, so the filter's clutter model, which
+    # sensor.clutter_rate 0 also changes, does not matter: the runs are equal step for step.
+    params = load_params_file('config/persistent.yaml')
+    scenario = replace(random_scenario(6, 4, 60), targets=(), random_births=None)
+    quiet = params.with_overrides({'sensor.clutter_rate': 0.0})
+    assert_same_runs(short_run(scenario, quiet), short_run(scenario, params, kinds=('scans',)))
+    plain = short_run(scenario, params)
+    assert any(not np.array_equal(a[1][i], b[1][i]) or not np.array_equal(a[0][i], b[0][i])
+               for a, b in zip(plain, short_run(scenario, quiet)) for i in a[0]), \
+        'the clutter moves the profile: the runs differ'
+
+
+def timeless(rows):
+    """Return the rows without their wall and CPU times, which no two runs share."""
+    return [{key: value for key, value in row.items() if not key.endswith('_time_s')}
+            for row in rows]
+
+
 def test_the_script_pairs_the_profile_with_its_oracle(tmp_path, capsys):
     main = SCRIPT['main']
     assert main(['--out', str(tmp_path), '--setting', 'paper_random', '--seeds', '1',
                  '--first-seed', '3', '--jobs', '1', '--kinds', 'peaks']) == 0
     rows = read_rows(tmp_path / 'evaluation.csv')
     assert [r['label'] for r in rows] == ['SAT-PHD persistent',
-                                          'SAT-PHD persistent, oracle looks (peaks)']
+                                          'SAT-PHD persistent, oracle triage (peaks)']
     assert {r['seed'] for r in rows} == {'3'}
     printed = capsys.readouterr().out
-    assert 'oracle looks (peaks) (B) against the profile (A)' in printed
+    assert 'oracle triage (peaks) (B) against the profile (A)' in printed
     assert '| paper_random | tracked_share |' in printed
-    with pytest.raises(SystemExit):
-        main(['--out', str(tmp_path), '--kinds', 'spots,targets'])
+    for bad in (['--kinds', 'spots,targets'], ['--kinds', ','],
+                ['--profile', str(tmp_path / 'evaluation.csv'), '--first-seed', '4']):
+        with pytest.raises(SystemExit):
+            main(['--out', str(tmp_path / 'bad'), '--setting', 'paper_random', '--seeds', '1',
+                  *bad])
+    # The profile's rows taken from that file pair with a fresh oracle run as before.
+    again = tmp_path / 'again'
+    assert main(['--out', str(again), '--setting', 'paper_random', '--seeds', '1',
+                 '--first-seed', '3', '--jobs', '1', '--kinds', 'peaks',
+                 '--profile', str(tmp_path / 'evaluation.csv')]) == 0
+    assert timeless(read_rows(again / 'evaluation.csv')) == timeless(rows)
+    assert capsys.readouterr().out.split('rows in')[1].split('\n', 1)[1] == \
+        printed.split('rows in')[1].split('\n', 1)[1]
