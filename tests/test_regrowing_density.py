@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 from scipy import special
 
+from sat_agent.actions import candidate_poses
+from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.regrowing_density import (
     discrete_gaussian, expected_undetected, Regrowth, step_variance)
 from sat_agent.config import load_params_file, SatParams
@@ -142,3 +144,33 @@ def test_a_neighbours_density_ages_like_the_own_one():
     density.predict(pose)
     density.predict(AWAY)
     np.testing.assert_allclose(ahead, density.values, rtol=1e-12)
+
+
+def test_the_density_scales_with_the_birth_rate_so_the_walks_do_not_depend_on_it():
+    # u_0 = 0 and every step is linear in u and b (prediction b + p_S K u, correction
+    # (1 - p_D) u), so u is proportional to phd.birth_rate (module docstring, "Numbers"); the
+    # walks weigh node worth, sums of u, against each other only (persistent_planning.py).
+    rates = (0.01, 0.04)       # the paper's rate and the random default's (~6 in 150 steps)
+    densities = [_density(_params(**{'phd.birth_rate': b})) for b in rates]
+    rng = np.random.default_rng(7)
+    previous = AWAY
+    for pose in rng.uniform(0.0, 100.0, (40, 2)):
+        for density in densities:
+            density.predict(previous)
+            density.correct(pose)
+        previous = pose
+    low, high = (expected_undetected(d.values) for d in densities)
+    assert low.min() > 0.0
+    np.testing.assert_allclose(high, 4.0 * low, rtol=1e-6)
+    # A lone agent without targets flies the same path at either rate.
+    start = np.array([10.0, 60.0])
+    paths = []
+    for b in rates:
+        agent = Agent(1, _params(**{'phd.birth_rate': b}), start, seed=0)
+        pose, actions = start, []
+        for k in range(1, 121):
+            action = agent.step(k, pose, np.zeros((0, 2)), []).action
+            actions.append(action)
+            pose = candidate_poses(pose, agent.params.actions)[action]
+        paths.append(actions)
+    assert len(set(paths[0])) > 2 and paths[0] == paths[1]
