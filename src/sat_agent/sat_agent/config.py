@@ -152,7 +152,9 @@ class PhdParams:
     """SMC-PHD budgets and birth model; the paper leaves all of these open."""
 
     # The paper's run has 2 births in 200 steps, so 0.01 matches its rate; the mass stays
-    # diffuse (1e-6 per m^2).
+    # diffuse (1e-6 per m^2). The random default's is ~0.04 (6 targets over steps 1-150): the
+    # search density only scales with it (beyond_paper/regrowing_density.py), and session 43
+    # measured the rest (docs/persistent_trials.md).
     birth_rate: float = param(0.01, 'uniform births over A: expected new targets per step',
                               low=0, high=10)
     birth_particles_uniform: int = param(2000, 'particles per step for the uniform births',

@@ -66,6 +66,12 @@ filter's own steady diffuse birth mass. A cell searched (p_D = 1) at step t amid
 regrows as u(k) = b (1 - p_S^(k - t)) / (1 - p_S); next to unsearched cells K carries their
 mass in as well.
 
+Since u_0 = 0 and both steps are linear in u and b, u is proportional to ``phd.birth_rate``: the
+rate scales the density and leaves the order of the nodes' worth, what the walks weigh
+(beyond_paper/persistent_planning.py), as it is. The paper's 0.01 a step is a quarter of the
+random default's (~6 targets over steps 1-150); docs/persistent_trials.md, session 43, measures
+what that costs through the filter's diffuse births, the one place the rate still acts.
+
 A neighbour's density of step j < k is predicted to k with the same model (the cells of its
 sender's square s_j held in the first step, as for the own density), so fusion ages as the
 own density does (issue 14 item 1).
