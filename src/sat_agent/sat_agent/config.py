@@ -417,6 +417,12 @@ class CooperationParams:
         0.05, 'additions.track_revisit: a searching agent flies back over a coasted target once '
         'the chance that its fit errs by more than phd.coast_gate when the agent gets there '
         'reaches this', low=0, high=1, low_open=True)
+    # A revisit priced on drift alone leaves a well-fitted report unlooked-at until it ends
+    # (68 steps): its target's death goes unseen (session 43, docs/persistent_trials.md).
+    revisit_death: float = param(
+        1.0, 'additions.track_revisit: a coasted target is also due for a revisit once the '
+        'chance that it died since its last estimate, 1 - p_S^t at the meeting step, reaches '
+        'this (1: never on that chance alone)', low=0, high=1, low_open=True)
     # No bound by default: at revisit_loss 0.1, bounds of 10 and 20 m left almost no revisit
     # (detected +0.7 and +0.0, tracked +0.3 and +0.1 on the same seeds).
     revisit_detour: float = param(

@@ -26,6 +26,11 @@ keeps the fit's next position in its next square once it can
 (investigation.keep_in_view_action). The scan over it continues the track (track continuity:
 the coasted position is an expected target of the extraction), so P_lost falls and the walk
 resumes; a target that is not there is dropped after ``phd.coast_misses`` looks.
+With ``cooperation.revisit_death`` below 1 (session 43) a target is also due once the chance
+that it died since its last estimate, 1 - p_S^t at the meeting step, reaches it, and due
+targets are ranked by p_S^t P_lost + 1 - p_S^t per metre, the chance that the report is wrong
+when the agent gets there: a well-fitted report drifts too slowly to fall due before it ends,
+and its target's death would go unseen for up to 68 steps (``visit_saves``).
 Why: on dev seeds 2001-2020 of the random default (persistent profile of session 21), 893 of
 11,730 target-steps (7.6 %) were of targets followed at least 8 steps and then lost for good
 or for a while: at the loss the fit had drifted 5-10 m off (429 target-steps), it had left
@@ -100,6 +105,21 @@ def due_loss(track: Track, arrival: int, params: SatParams) -> float:
     return loss_probability(track, arrival, params.phd.coast_gate)
 
 
+def visit_saves(alive: float, lost: float, loss: float, death: float) -> Optional[float]:
+    """Return what a visit saves (module docstring), or None when the target is not due.
+
+    alive = p_S^t and lost = P_lost at the meeting step. Due when lost reaches
+    ``cooperation.revisit_loss`` (loss) or the chance of a death since the last estimate,
+    1 - alive, reaches death (``cooperation.revisit_death``, 1: never). A visit saves the
+    track of a live target that drifted, alive lost; with the death check, also the report
+    of a dead one, 1 - alive: the chance that the report is wrong when the agent gets there.
+    """
+    checks_death = death < 1.0
+    if lost < loss and not (checks_death and 1.0 - alive >= death):
+        return None
+    return alive * lost + (1.0 - alive if checks_death else 0.0)
+
+
 class NoRevisit:
     """Without the addition a coasted target is seen again only when a square passes over it."""
 
@@ -133,14 +153,16 @@ class TrackRevisit:
                 continue
             arrival = meeting_step(track, pose, step, speed)
             lost = due_loss(track, arrival, params)
-            if lost < params.cooperation.revisit_loss:
+            alive = params.motion.p_survival ** (arrival - track.steps[-1])
+            saves = visit_saves(alive, lost, params.cooperation.revisit_loss,
+                                params.cooperation.revisit_death)
+            if saves is None:
                 continue
             goal = expected_point(track, arrival, params)
             reach = float(np.hypot(*(goal - pose)))
             if reach + np.hypot(*(walk_goal - goal)) - direct > params.cooperation.revisit_detour:
                 continue
-            alive = params.motion.p_survival ** (arrival - track.steps[-1])
-            rate = alive * lost / max(reach, MIN_COST)
+            rate = saves / max(reach, MIN_COST)
             if rate > best_rate:
                 keep = expected_point(track, step + 1, params)[None, :]
                 best, best_rate = Revisit(goal, keep), rate
