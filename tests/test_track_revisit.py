@@ -8,7 +8,7 @@ from sat_agent.actions import top_speed
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.track_coasting import KAPPA, Track, TrackCoasting
 from sat_agent.beyond_paper.track_revisit import (
-    due_loss, loss_probability, meeting_step, NoRevisit, TrackRevisit)
+    due_loss, loss_probability, meeting_step, NoRevisit, TrackRevisit, visit_saves)
 from sat_agent.config import load_params_file
 from sat_agent.state_extraction import TargetEstimate
 from sat_world_sim.inprocess_swarm import InProcessSwarm
@@ -106,6 +106,40 @@ def test_a_coasted_target_is_revisited_once_its_loss_reaches_the_threshold():
     assert revisit.revisit(20, pose, _followed().tracks, pose) is None
     assert revisit.revisit(200, pose, _followed(steps=4).tracks, pose) is None
     assert NoRevisit().revisit(200, pose, coasting.tracks, pose) is None
+
+
+def test_a_well_fitted_report_falls_due_when_its_target_may_have_died():
+    # 60 estimates erring 0.1 m: the fit drifts too little to reach revisit_loss before the
+    # report ends (p_S^t < 1/2), so without the death check it is never looked at again.
+    coasting = _followed(steps=60, noise=0.1)
+    track, speed, p_s = coasting.tracks[0], top_speed(PARAMS.actions), PARAMS.motion.p_survival
+    death = 0.2
+    checking = TrackRevisit(PARAMS.with_overrides({'cooperation.revisit_death': death}))
+    drift_due, death_due = [], []
+    for step in range(61, 200):
+        coasting.update(step, FAR, [], NONE, NONE)
+        if not coasting.tracks:
+            break
+        if TrackRevisit(PARAMS).revisit(step, FAR, coasting.tracks, FAR) is not None:
+            drift_due.append(step)
+        wanted = checking.revisit(step, FAR, coasting.tracks, FAR)
+        dead = 1.0 - p_s ** (meeting_step(track, FAR, step, speed) - 60)
+        assert (wanted is not None) == (dead >= death), step
+        if wanted is not None:
+            death_due.append(step)
+    assert step < 200 and not drift_due
+    assert death_due and death_due[-1] == step - 1
+
+
+def test_a_visit_saves_the_chance_that_the_report_is_wrong_when_it_checks_deaths():
+    loss = PARAMS.cooperation.revisit_loss
+    # Without the death check (1): due on drift alone, worth p_S^t P_lost, as before.
+    assert visit_saves(0.9, 0.5, loss, 1.0) == 0.9 * 0.5
+    assert visit_saves(0.1, 0.01, loss, 1.0) is None
+    # With it: due on either, worth p_S^t P_lost + 1 - p_S^t.
+    assert visit_saves(0.85, 0.01, loss, 0.2) is None
+    assert visit_saves(0.7, 0.01, loss, 0.2) == pytest.approx(0.7 * 0.01 + 0.3)
+    assert visit_saves(0.9, 0.5, loss, 0.2) == pytest.approx(0.9 * 0.5 + 0.1)
 
 
 def test_of_two_due_targets_the_nearer_is_revisited_first():

@@ -418,7 +418,10 @@ class CooperationParams:
         'the chance that its fit errs by more than phd.coast_gate when the agent gets there '
         'reaches this', low=0, high=1, low_open=True)
     # A revisit priced on drift alone leaves a well-fitted report unlooked-at until it ends
-    # (68 steps): its target's death goes unseen (session 43, docs/persistent_trials.md).
+    # (68 steps): its target's death goes unseen. 0.2 (rule 23, persistent profile, random,
+    # fresh dev seeds 11051-11350, paired): false-track steps -6.3*, but detected -3.7 points*,
+    # tracked -1.2, OSPA +0.01 m: the flights cost the search what the checks save; not kept
+    # (docs/persistent_trials.md, session 43).
     revisit_death: float = param(
         1.0, 'additions.track_revisit: a coasted target is also due for a revisit once the '
         'chance that it died since its last estimate, 1 - p_S^t at the meeting step, reaches '
