@@ -148,7 +148,7 @@ def test_a_neighbours_density_ages_like_the_own_one():
 
 def test_the_density_scales_with_the_birth_rate_so_the_walks_do_not_depend_on_it():
     # u_0 = 0 and every step is linear in u and b (prediction b + p_S K u, correction
-    # (1 - p_D) u), so u is proportional to phd.birth_rate (module docstring, "Numbers"); the
+    # (1 - p_D) u), so u is proportional to phd.birth_rate (module docstring); the
     # walks weigh node worth, sums of u, against each other only (persistent_planning.py).
     rates = (0.01, 0.04)       # the paper's rate and the random default's (~6 in 150 steps)
     densities = [_density(_params(**{'phd.birth_rate': b})) for b in rates]
