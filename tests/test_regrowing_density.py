@@ -85,6 +85,20 @@ def test_birth_plus_diffusion_a_point_of_mass_spreads_as_the_discrete_gaussian()
                                           rel=1e-9)
 
 
+def test_the_kernels_velocity_spread_may_be_set_apart_from_the_filters_births():
+    # search.density_velocity_std 0 (the default) takes phd.birth_velocity_std's; set, it
+    # alone spreads K and the filter's newborn prior is left to the filter.
+    dt, q = PERSISTENT.motion.dt, PERSISTENT.motion.process_noise
+    births_only = _params(**{'phd.birth_velocity_std': 0.5})
+    assert step_variance(births_only) == pytest.approx(0.5 ** 2 * dt ** 2 + q * dt ** 3 / 3)
+    apart = _params(**{'phd.birth_velocity_std': 0.5, 'search.density_velocity_std': 1.0})
+    assert apart.phd.birth_velocity_std == 0.5
+    assert step_variance(apart) == pytest.approx(step_variance(PERSISTENT))
+    assert np.array_equal(_density(apart).model.kernel, _density(PERSISTENT).model.kernel)
+    assert not np.array_equal(_density(births_only).model.kernel,
+                              _density(PERSISTENT).model.kernel)
+
+
 def test_the_discrete_gaussian_has_unit_mass_and_the_asked_variance():
     for variance in (0.0, 0.1, 0.2567, 1.0, 4.0):
         kernel = discrete_gaussian(variance)

@@ -288,6 +288,12 @@ class SearchParams:
         'square', 'additions.regrowing_density: what a scan detects of the undetected targets: '
         "'square' p_D in every cell of the sensing square, 'births' p_D times the chance that "
         "the cell's target's measurement lands in the square", choices=SCAN_DETECTIONS)
+    # The density's kernel is a Markov approximation (its spread grows like sqrt(t), a walker's
+    # like t: beyond_paper/regrowing_density.py), so its best sigma_v need not be the filter's
+    # newborn prior: rule 24 (docs/persistent_trials.md) sets the two apart.
+    density_velocity_std: float = param(
+        0.0, "additions.regrowing_density: the undetected targets' velocity spread sigma_v of "
+        "its motion kernel K (m/s); 0: phd.birth_velocity_std's", low=0, high=100)
     lattice_spacing: float = param(1.0, 'spacing of the virtual-target lattice (m)',
                                    low=0, low_open=True)
     # One node per sensing footprint, so visiting every node sweeps the whole area once.

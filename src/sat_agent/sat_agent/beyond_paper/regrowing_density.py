@@ -23,7 +23,8 @@ and over velocity). Its prediction is the PHD's, restricted to targets not seen 
 - K(c | c'): the position marginal of the NCV transition pi_{k|k-1} over one step. A target at
   p' with velocity v' moves to p' + v' T + w, w ~ N(0, q T^3 / 3 I) (the position block of
   Q, q = ``motion.process_noise``). An undetected target's velocity is not observed; at its
-  prior N(0, sigma_v^2 I) (sigma_v = ``phd.birth_velocity_std``) the step is
+  prior N(0, sigma_v^2 I) (sigma_v = ``phd.birth_velocity_std``; beyond the derivation,
+  ``search.density_velocity_std`` may set K's sigma_v apart from the filter's) the step is
   N(0, sigma_K^2 I) with sigma_K^2 = sigma_v^2 T^2 + q T^3 / 3. On the lattice, K is the
   separable discrete Gaussian kernel of that variance, e^{-t} I_n(t) per axis with
   t = sigma_K^2 / s^2 (s the lattice spacing; ``discrete_gaussian``): its variance is
@@ -106,10 +107,15 @@ def expected_undetected(values: np.ndarray) -> np.ndarray:
     return -np.log(np.clip(values, TINY, 1.0))
 
 
+def density_velocity_std(params: SatParams) -> float:
+    """sigma_v of K: ``search.density_velocity_std``, or ``phd.birth_velocity_std`` when 0."""
+    return params.search.density_velocity_std or params.phd.birth_velocity_std
+
+
 def step_variance(params: SatParams) -> float:
     """sigma_K^2 = sigma_v^2 T^2 + q T^3 / 3 (m^2): the one-step position spread of K."""
     dt = params.motion.dt
-    return (params.phd.birth_velocity_std ** 2 * dt ** 2
+    return (density_velocity_std(params) ** 2 * dt ** 2
             + params.motion.process_noise * dt ** 3 / 3.0)
 
 
