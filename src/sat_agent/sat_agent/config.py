@@ -290,7 +290,9 @@ class SearchParams:
         "the cell's target's measurement lands in the square", choices=SCAN_DETECTIONS)
     # The density's kernel is a Markov approximation (its spread grows like sqrt(t), a walker's
     # like t: beyond_paper/regrowing_density.py), so its best sigma_v need not be the filter's
-    # newborn prior: rule 24 (docs/persistent_trials.md) sets the two apart.
+    # newborn prior. Rule 24 (docs/persistent_trials.md; persistent profile, random, fresh dev
+    # seeds 11451-11750) set the filter's at 0.5 and this at 1: detected +1.6 points (p 0.20),
+    # OSPA -0.05 m: not kept.
     density_velocity_std: float = param(
         0.0, "additions.regrowing_density: the undetected targets' velocity spread sigma_v of "
         "its motion kernel K (m/s); 0: phd.birth_velocity_std's", low=0, high=100)
