@@ -292,7 +292,8 @@ class SearchParams:
     # like t: beyond_paper/regrowing_density.py), so its best sigma_v need not be the filter's
     # newborn prior. Rule 24 (docs/persistent_trials.md; persistent profile, random, fresh dev
     # seeds 11451-11750) set the filter's at 0.5 and this at 1: detected +1.6 points (p 0.20),
-    # OSPA -0.05 m: not kept.
+    # OSPA -0.05 m; this alone at 0.5 (rule 25, 11851-12150): area by k = 100 +0.9 points,
+    # detected -1.4, OSPA -0.01 m: not kept.
     density_velocity_std: float = param(
         0.0, "additions.regrowing_density: the undetected targets' velocity spread sigma_v of "
         "its motion kernel K (m/s); 0: phd.birth_velocity_std's", low=0, high=100)
