@@ -5,7 +5,7 @@ from sat_agent.config import load_params_file
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.metrics import compute_metrics, MetricsConfig, StepRecord
 from sat_world_sim.ospa_breakdown import coasted_tracks, false_sources, ospa_without
-from sat_world_sim.ospa_breakdown import report_sources
+from sat_world_sim.ospa_breakdown import ospa_regimes, regime, REGIMES, report_sources
 from sat_world_sim.ospa_breakdown import SOURCES, what_if_estimates, what_if_ospa
 from sat_world_sim.random_scenarios import random_scenario
 
@@ -118,3 +118,27 @@ def test_false_sources_scores_the_metrics_ospa_and_what_each_source_costs():
             assert found.mean_ospa_without[source] <= found.mean_ospa + 1e-12
         else:
             assert found.mean_ospa_without[source] == pytest.approx(found.mean_ospa)
+
+
+def test_regime_names_how_the_reports_compare_with_the_targets():
+    assert [regime(n, m) for n, m in ((3, 0), (3, 1), (3, 3), (3, 4), (0, 2), (0, 0))] == list(
+        REGIMES)
+
+
+def test_ospa_regimes_split_the_mean_ospa_and_a_false_report_costs_only_beyond_the_targets():
+    far = [[90.0, 90.0]]
+    records = [record(1, [[0.0, 0.0], [50.0, 50.0]], {1: far}),         # fewer: OSPA c
+               record(2, [[0.0, 0.0]], {1: [[3.0, 4.0]] + far}),        # more: (25 + c^2) / 2
+               record(3, [], {}),                                       # neither: 0
+               record(4, [[0.0, 0.0]], {})]                             # no report: c
+    split = ospa_regimes(records)
+    assert split['fewer reports than targets'] == pytest.approx((0.25, 10.0 / 4))
+    assert split['more reports than targets'] == pytest.approx((0.25, np.sqrt(125 / 2) / 4))
+    assert split['neither'] == (0.25, 0.0)
+    assert split['targets, no report'] == pytest.approx((0.25, 10.0 / 4))
+    assert split['as many'] == split['reports, no target'] == (0.0, 0.0)
+    assert sum(part for _, part in split.values()) == pytest.approx(
+        compute_metrics(records, '', 0)['summary']['mean_ospa'])
+    # The false report of step 1 costs nothing: without it the step still scores c.
+    assert ospa_regimes(records[:1])['fewer reports than targets'][1] == pytest.approx(
+        ospa_regimes([record(1, [[0.0, 0.0], [50.0, 50.0]], {})])['targets, no report'][1])

@@ -79,15 +79,18 @@ def test_a_target_out_of_view_is_reported_on_its_walk_until_p_s_says_it_may_be_g
         # 20 estimates erring 0.5 m pin the walk: within 2 m even 68 steps on.
         assert np.hypot(*(step.coasted[0] - _walk(k))) < 2.0, k
         np.testing.assert_allclose(step.expected, [coasting.tracks[0].predict(k + 1)])
+    track = coasting.tracks[0]
     assert len(coasting.update(21 + horizon, FAR, [], NONE, NONE).coasted) == 0
-    assert coasting.tracks == []
+    assert coasting.tracks == [] and coasting.drops == [(track, 'report expired')]
 
 
 def test_a_track_needs_a_few_estimates_and_fresh_counts_the_short_ones():
     coasting = TrackCoasting(PARAMS)
     assert _follow(coasting, 2).fresh == 1
     # Two estimates are below phd.coast_min_estimates (3): nothing coasted, track dropped.
+    track = coasting.tracks[0]
     assert len(coasting.update(3, FAR, [], NONE, NONE).coasted) == 0
+    assert coasting.drops == [(track, 'short track')]
     coasting = TrackCoasting(PARAMS)
     assert _follow(coasting, PARAMS.cooperation.follow_steps - 1).fresh == 1
     assert _follow(TrackCoasting(PARAMS), PARAMS.cooperation.follow_steps).fresh == 0
@@ -131,6 +134,7 @@ def test_looking_there_and_not_seeing_it_or_a_neighbour_seeing_it_ends_the_repor
         # The agent's square over the walk, and no estimate: a miss each scan.
         reported = coasting.update(k, _walk(k), [], NONE, NONE).coasted
         assert len(reported) == (1 if k - 20 <= misses else 0), k
+    assert [reason for _, reason in coasting.drops] == ['looked, not found']
     # A neighbour's square counts as looking there.
     coasting = TrackCoasting(PARAMS)
     _follow(coasting, 20)
@@ -141,11 +145,16 @@ def test_looking_there_and_not_seeing_it_or_a_neighbour_seeing_it_ends_the_repor
     _follow(coasting, 20)
     neighbour = _walk(21)[None] + 1.0
     assert len(coasting.update(21, FAR, [], NONE, neighbour).coasted) == 0
+    assert [reason for _, reason in coasting.drops] == ['a neighbour reports it']
     # A walk that leaves the area is not reported beyond it.
     coasting = TrackCoasting(PARAMS)
     _follow(coasting, 20)
     steps_out = int(np.ceil(_walk(20)[1] / -VELOCITY[1])) + 1
     assert len(coasting.update(20 + steps_out, FAR, [], NONE, NONE).coasted) == 0
+    assert [reason for _, reason in coasting.drops] == ['fit left A']
+    # The next update drops nothing more: drops names the last update's only.
+    coasting.update(21 + steps_out, FAR, [], NONE, NONE)
+    assert coasting.drops == [] and coasting.tracks == []
 
 
 def test_an_estimate_continues_the_nearest_track_one_to_one():

@@ -146,7 +146,7 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
     truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
     estimate = swarm_estimate(record.estimates, config.merge_distance)
     result = ospa(truth, estimate, config.cutoff, config.order)
-    trackers, false = _trackers(truth, record.estimates, config.detection_radius)
+    per_target, false = trackers(truth, record.estimates, config.detection_radius)
     modes = {str(a): str(record.modes[a]) for a in sorted(record.modes)}
     return {
         'step': int(record.step),
@@ -158,8 +158,8 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
         'searched_pct': 100.0 * float(record.searched_fraction),
         'tracking': any(m == 'TRACK' for m in modes.values()),
         'modes': modes,
-        'n_tracked': int(np.count_nonzero(trackers >= 1)),
-        'n_duplicate': int(np.count_nonzero(trackers >= 2)),
+        'n_tracked': int(np.count_nonzero(per_target >= 1)),
+        'n_duplicate': int(np.count_nonzero(per_target >= 2)),
         'n_false': false,
     }
 
@@ -170,8 +170,8 @@ def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig) -> Lis
     for record in records:
         ids = np.asarray(record.truth_ids, dtype=int).reshape(-1)
         truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
-        in_view = _in_any_square(truth, record.agent_poses, config.sensor_side)
-        detected = _trackers(truth, record.estimates, config.detection_radius)[0] > 0
+        in_view = in_any_square(truth, record.agent_poses, config.sensor_side)
+        detected = trackers(truth, record.estimates, config.detection_radius)[0] > 0
         for row, target_id in enumerate(ids.tolist()):
             entry = targets.setdefault(target_id, {'id': target_id, 'born': record.step,
                                                    'died': None, 'first_in_view': None,
@@ -195,14 +195,15 @@ def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig) -> Lis
     return result
 
 
-def _in_any_square(points: np.ndarray, poses: Mapping[int, np.ndarray], side: float):
+def in_any_square(points: np.ndarray, poses: Mapping[int, np.ndarray], side: float):
+    """Mask of the (n, 2) points inside some agent's sensing square (``first_in_view``)."""
     mask = np.zeros(len(points), dtype=bool)
     for pose in poses.values():
         mask |= in_sensing_square(points, pose, side)
     return mask
 
 
-def _trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
+def trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
     """Count per true point the agents with an estimate assigned to it, and the false estimates.
 
     Returns (counts per point, estimates of all agents assigned to no point); module docstring.

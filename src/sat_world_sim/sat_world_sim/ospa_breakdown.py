@@ -18,7 +18,13 @@ every target) by source: an agent's own estimate (X-hat_k), or a coasted track
 that never had a target within the detection radius (born on clutter). Per source: the false
 report-steps per run and the mean OSPA without them.
 
-scripts/ospa_breakdown.py prints both over seeds (docs/persistent_trials.md, session 30).
+``ospa_regimes`` splits the mean OSPA by how the step's swarm estimate (m points) compares with
+its targets (n): with m < n a report farther than c from every target costs nothing (it takes
+the place of a missed target's c^p), so only the steps where the reports outnumber the targets
+charge a false one; the steps with targets and no report score c (session 45).
+
+scripts/ospa_breakdown.py prints all three over seeds (docs/persistent_trials.md, sessions 30
+and 45), with sat_world_sim/target_steps.py's split of the target-steps.
 """
 
 from dataclasses import dataclass
@@ -31,6 +37,8 @@ from sat_agent.ospa import ospa
 from sat_world_sim.metrics import compute_metrics, MetricsConfig, StepRecord, swarm_estimate
 
 WHAT_IFS = ('reported', 'without false', 'and localised', 'and kept after detection')
+REGIMES = ('targets, no report', 'fewer reports than targets', 'as many',
+           'more reports than targets', 'reports, no target', 'neither')
 SOURCES = ('estimate', 'coasted, target died', 'coasted, target alive', 'coasted, no target')
 
 
@@ -73,6 +81,32 @@ def what_if_ospa(records: Sequence[StepRecord], config: MetricsConfig = MetricsC
             truth, swarm_estimate(record.estimates, config.merge_distance), detected, config)
         totals += [ospa(truth, e, config.cutoff, config.order).distance for e in estimates]
     return dict(zip(WHAT_IFS, totals / max(len(records), 1)))
+
+
+def regime(targets: int, reports: int) -> str:
+    """Return the step's entry of REGIMES for n targets and m reports (module docstring)."""
+    if targets == 0:
+        return REGIMES[4] if reports else REGIMES[5]
+    if reports == 0:
+        return REGIMES[0]
+    return REGIMES[1] if reports < targets else REGIMES[2] if reports == targets else REGIMES[3]
+
+
+def ospa_regimes(records: Sequence[StepRecord], config: MetricsConfig = MetricsConfig()
+                 ) -> Dict[str, Tuple[float, float]]:
+    """Return per REGIMES entry (share of the steps, its part of the mean OSPA).
+
+    The parts sum to the mean OSPA of the records.
+    """
+    shares, parts = dict.fromkeys(REGIMES, 0.0), dict.fromkeys(REGIMES, 0.0)
+    for record in records:
+        truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
+        estimate = swarm_estimate(record.estimates, config.merge_distance)
+        name = regime(len(truth), len(estimate))
+        shares[name] += 1.0
+        parts[name] += ospa(truth, estimate, config.cutoff, config.order).distance
+    steps = max(len(records), 1)
+    return {name: (shares[name] / steps, parts[name] / steps) for name in REGIMES}
 
 
 @dataclass
@@ -120,13 +154,14 @@ def report_sources(truth: np.ndarray, truth_ids: Sequence[int], own: np.ndarray,
     return sources
 
 
-def false_sources(swarm, steps: int, config: MetricsConfig = MetricsConfig()) -> FalseSources:
+def false_sources(swarm, steps: int, config: MetricsConfig = MetricsConfig(),
+                  ledger=None) -> FalseSources:
     """Step an in-process swarm (inprocess_swarm.InProcessSwarm); sort its false reports.
 
-    The sources are the module docstring's; the run's records are kept for what_if_ospa.
+    The sources are the module docstring's; the run's records are kept for what_if_ospa and
+    ospa_regimes. ledger: a target_steps.TargetStepLedger that observes every step, or None.
     """
-    # id(track) -> (track, id of the target it last had within the detection radius); the
-    # track is held so that its id is not reused while it is in the map.
+    # note_followed_targets's map.
     followed: Dict[int, Tuple[object, Optional[int]]] = {}
     counts = dict.fromkeys(SOURCES, 0)
     ospa_sums = np.zeros(len(SOURCES) + 1)
@@ -134,13 +169,15 @@ def false_sources(swarm, steps: int, config: MetricsConfig = MetricsConfig()) ->
     for _ in range(steps):
         record = swarm.step()
         records.append(record)
+        if ledger is not None:
+            ledger.observe(swarm, record)
         truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
         ids = [int(i) for i in np.asarray(record.truth_ids).reshape(-1)]
         reports: Dict[int, Tuple[np.ndarray, List[Optional[str]]]] = {}
         live = set()
         for agent_id, output in swarm.last_outputs.items():
             tracks = swarm.agents[agent_id].coasting.tracks
-            _follow(tracks, record.step, truth, ids, followed, config)
+            note_followed_targets(tracks, record.step, truth, ids, followed, config)
             live.update(id(track) for track in tracks)
             coasted = coasted_tracks(tracks, record.step)
             own = output.report.target_positions()
@@ -160,9 +197,14 @@ def false_sources(swarm, steps: int, config: MetricsConfig = MetricsConfig()) ->
                         dict(zip(SOURCES, (float(m) for m in means[1:]))), records)
 
 
-def _follow(tracks, step: int, truth: np.ndarray, ids: Sequence[int],
-            followed: Dict[int, Tuple[object, Optional[int]]], config: MetricsConfig) -> None:
-    """Note, for each track continued at step, the target within the detection radius of it."""
+def note_followed_targets(tracks, step: int, truth: np.ndarray, ids: Sequence[int],
+                          followed: Dict[int, Tuple[object, Optional[int]]],
+                          config: MetricsConfig) -> None:
+    """Note, for each track continued at step, the target within the detection radius of it.
+
+    followed: id(track) -> (track, id of the target it last had within the radius, or None);
+    the track is held so that its id is not reused while it is in the map.
+    """
     for track in tracks:
         if track.steps[-1] != step:
             continue

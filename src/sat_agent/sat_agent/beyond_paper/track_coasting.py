@@ -68,7 +68,7 @@ until it loses its targets).
 """
 
 from dataclasses import dataclass, field
-from typing import List, Optional, Sequence
+from typing import List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -85,6 +85,10 @@ from sat_agent.sensor_model import in_sensing_square
 # The fit's drift over its own standard error, measured (beyond_paper/track_revisit.py).
 KAPPA = 2.0
 NO_MEASUREMENTS = np.zeros((0, 2))
+# Why a track without an estimate at step k is dropped (part 2 of the module docstring), in the
+# order TrackCoasting tests them; TrackCoasting.drops names them for diagnostics.
+DROP_REASONS = ('fit left A', 'report expired', 'short track', 'looked, not found',
+                'a neighbour reports it')
 
 
 @dataclass
@@ -283,6 +287,7 @@ class NoCoasting:
     """The paper's agent: it reports X-hat_k only and follows every target it estimates."""
 
     tracks: tuple = ()
+    drops: tuple = ()
 
     def update(self, step: int, pose, estimates: Sequence, neighbour_poses,
                neighbour_targets, measurements=NO_MEASUREMENTS) -> CoastingStep:
@@ -296,6 +301,8 @@ class TrackCoasting:
 
     params: SatParams
     tracks: List[Track] = field(default_factory=list)
+    # The tracks the last update dropped, each with its reason (one of DROP_REASONS).
+    drops: List[Tuple[Track, str]] = field(default_factory=list)
 
     def update(self, step: int, pose, estimates: Sequence, neighbour_poses,
                neighbour_targets, measurements=NO_MEASUREMENTS) -> CoastingStep:
@@ -321,17 +328,22 @@ class TrackCoasting:
             fresh -= followed_long_enough(track, self.params)
             kept.append(track)
         coasted = []
+        self.drops = []
         matched_tracks = {t for t, _ in pairs}
         for t in range(len(self.tracks)):
             if t in matched_tracks:
                 continue
             track, position = self.tracks[t], coast_point(self.tracks[t], step, self.params)
             if position is None:
+                self.drops.append((track, DROP_REASONS[0]))
                 continue
             track.misses += bool(in_sensing_square(position, looked, side).any())
-            if self._believed(track, position, step, neighbour_targets):
+            reason = self._drop_reason(track, position, step, neighbour_targets)
+            if reason is None:
                 kept.append(track)
                 coasted.append(position)
+            else:
+                self.drops.append((track, reason))
         matched_estimates = {e for _, e in pairs}
         for e in range(len(estimates)):
             if e not in matched_estimates:
@@ -378,15 +390,23 @@ class TrackCoasting:
         folds = self.params.phd.coast_boundary in ('reflect', 'bounce')
         return (area.width, area.height) if folds else None
 
-    def _believed(self, track: Track, position: np.ndarray, step: int,
-                  neighbour_targets) -> bool:
-        """Whether a track without an estimate at step is still reported (module docstring)."""
+    def _drop_reason(self, track: Track, position: np.ndarray, step: int,
+                     neighbour_targets) -> Optional[str]:
+        """Why a track without an estimate at step, its fit in A, is dropped; None: reported.
+
+        The first of DROP_REASONS[1:] that holds (module docstring).
+        """
         neighbours = np.asarray(neighbour_targets, dtype=float).reshape(-1, 2)
-        return (self._alive_enough(track, step)
-                and track.length >= self.params.phd.coast_min_estimates
-                and track.misses <= self.params.phd.coast_misses
-                and not (len(neighbours) and np.min(np.hypot(*(neighbours - position).T))
-                         <= self.params.phd.coast_gate))
+        phd = self.params.phd
+        if not self._alive_enough(track, step):
+            return DROP_REASONS[1]
+        if track.length < phd.coast_min_estimates:
+            return DROP_REASONS[2]
+        if track.misses > phd.coast_misses:
+            return DROP_REASONS[3]
+        if len(neighbours) and np.min(np.hypot(*(neighbours - position).T)) <= phd.coast_gate:
+            return DROP_REASONS[4]
+        return None
 
     def _alive_enough(self, track: Track, step: int) -> bool:
         """Whether p_S^t is high enough to report the track, by phd.coast_report."""
