@@ -29,7 +29,7 @@ from sat_world_sim.paired_statistics import mean_interval
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import default_cell, PERSISTENT_LABEL, PERSISTENT_PROFILE
 from sat_world_sim.study_design import scenario_for, SETTINGS
-from sat_world_sim.target_steps import AFTER, CATEGORIES, TargetStepLedger
+from sat_world_sim.target_steps import AFTER, BEFORE, CATEGORIES, TargetStepLedger
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -88,10 +88,10 @@ def main(argv=None) -> int:
         print(f'  {name:26s} {mean_interval(100.0 * shares[:, column]).describe(1)}  '
               f'{mean_interval(parts[:, column]).describe(3)}')
     print('target-steps: per run; % of all; % of those at or after the first detection')
-    after = steps[:, len(CATEGORIES) - len(AFTER):].sum(axis=1, keepdims=True)
+    after = steps[:, len(BEFORE):].sum()
     for column, name in enumerate(CATEGORIES):
         share_after = ('' if name not in AFTER
-                       else f'  {100.0 * steps[:, column].sum() / after.sum():5.1f} %')
+                       else f'  {100.0 * steps[:, column].sum() / after:5.1f} %')
         print(f'  {name:34s} {mean_interval(steps[:, column]).describe(1)}'
               f'  {100.0 * steps[:, column].sum() / steps.sum():5.1f} %{share_after}')
     return 0
