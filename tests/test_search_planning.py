@@ -193,6 +193,15 @@ def test_planner_marks_nodes_in_the_sensing_square_visited():
     assert len(planner.walk) == 96
 
 
+def test_visit_share_counts_a_node_visited_only_in_the_middle_of_the_square():
+    middle = planned(params=PARAMS.with_overrides({'search.visit_share': 0.6}))
+    # (10, 10): four centres on the square's edges, 5 m off: in view, not in its middle 6 m.
+    assert middle.mark_visited((10.0, 10.0)).size == 0
+    assert len(middle.walk) == 100
+    assert middle.mark_visited((7.0, 7.0)).tolist() == [0]
+    assert len(middle.walk) == 99
+
+
 def test_planner_drops_nodes_searched_by_others_when_given_fused_values():
     planner = planned()
     values = fresh_values()

@@ -264,11 +264,14 @@ class SearchPlanner:
     def mark_visited(self, pose, node_values=None) -> np.ndarray:
         """Drop the walk's nodes whose centre is in the sensing square at pose; return them.
 
+        With search.visit_share below 1 only the middle of the square counts (beyond the paper).
+
         With node_values (fused search values) and additions.drop_searched_nodes, nodes another
         agent searched meanwhile are dropped too (beyond_paper/drop_searched_nodes.py).
         """
         centers = self._map.centers[self._walk]
-        visited = in_sensing_square(centers, _point(pose), self._params.sensor.square_side)
+        side = self._params.sensor.square_side * self._params.search.visit_share
+        visited = in_sensing_square(centers, _point(pose), side)
         if node_values is not None:
             values = np.asarray(node_values, dtype=float).reshape(-1)
             if values.size != self._map.size:
