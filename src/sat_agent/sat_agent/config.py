@@ -312,7 +312,9 @@ class SearchParams:
     # The paper marks a node visited once its centre is in the sensing square, so a walk turns
     # when the square's edge reaches the centre and may leave half of the node's region unseen:
     # after 150 steps the profile's squares had never held 4 % of the area, nine tenths of it
-    # within 2 m of the border (session 46, docs/persistent_trials.md).
+    # within 2 m of the border. 0.6 (rule 27, persistent profile, random, fresh dev seeds
+    # 12811-13110, paired): searched by k = 100 +1.1 points (p < 0.001) but detected -1.1,
+    # tracked -2.3 (p 0.049), OSPA +0.08 m: not kept (docs/persistent_trials.md, session 46).
     visit_share: float = param(
         1.0, "a walk's node counts as visited once its centre lies in the middle square of this "
         "share of the sensing square's side around the agent; 1: the whole square (the "
