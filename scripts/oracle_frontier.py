@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""How an oracle trades detected for tracked share: the frontier behind README's issue 15 verdict.
+"""How an oracle trades detected for tracked share: the frontier behind issue 15's verdict.
 
 The oracle sweep-and-track (sat_world_sim/oracle_sweep.py: the oracle sweep's strips and
 perfect sensor; an agent that sees a target nobody follows follows it) with each follow limit L

@@ -412,7 +412,8 @@ class CooperationParams:
     # persistent profile leaves the addition off (config/persistent.yaml says why).
     # A fixed count trades: dev seeds at random, paired with 20 alone, 10 alone detected +3.5
     # points and tracked -2.3 (2001-2100) and -3.1 (2201-2400). 8 and 4 cm/s (what 20
-    # estimates erring 1 m give) detected as much more without that loss (README, issue 15).
+    # estimates erring 1 m give) detected as much more without that loss
+    # (docs/persistent_trials.md).
     follow_steps: int = param(
         8, 'additions.track_coasting: a tracking agent returns to search once every target '
         'in its square has a track of at least this many estimates', low=2, high=MANY)
@@ -432,7 +433,7 @@ class CooperationParams:
         'nothing) for this many steps', low=0, high=MANY)
     # Dev seeds 2601-2700 at random, paired with the persistent profile: 0.05 / 0.1 / 0.2 gave
     # detected -2.5 / -4.3 / -3.6 points, tracked +0.4 / +0.9 / +0.0; 0.05 on fresh seeds
-    # 2701-3000: detected -0.1, tracked +2.2 (p < 0.001), OSPA -0.16 m (README, issue 15).
+    # 2701-3000: detected -0.1, tracked +2.2 (p < 0.001), OSPA -0.16 m (docs/persistent_trials.md).
     # 0.02 (session 31, dev seeds 6841-7140): tracked +0.37 points, n.s.
     revisit_loss: float = param(
         0.05, 'additions.track_revisit: a searching agent flies back over a coasted target once '

@@ -43,7 +43,8 @@ searchers); with ``dispatch`` a free follower takes the nearest target, followed
 not released, that any agent has had in its square so far (not only one in its own square),
 flies to it at most v a step and follows it from then on: the team knows where every target it
 has seen is, as a swarm sharing perfect tracks would. Both keep the strips: an agent flies back
-to its own when it stops following. README (issue 15) has their figures: none meets the floors.
+to its own when it stops following. docs/persistent_trials.md has their figures: none meets the
+floors.
 
 With ``tour`` (session 35) the agents do not fly strips: they ride one closed tour over every
 lane, evenly phased, the cyclic strategy of persistent patrolling (Chevaleyre, "Theoretical
@@ -61,7 +62,7 @@ near P/n steps where a strip's ends wait a whole ping-pong lap:
   follower stays empty; nobody closes the gap.
 
 At the random default it finds more targets than the strips (+9 points over 300 fresh dev
-seeds; README, issue 15, and docs/persistent_trials.md, sessions 34-35, have the paired
+seeds; docs/persistent_trials.md, sessions 34-35, have the paired
 figures), but it is not a new yardstick: issue 8's ceiling, which issue 15's detected floor is
 a share of, stays the strips' sweep.
 

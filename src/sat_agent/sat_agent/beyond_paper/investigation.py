@@ -13,18 +13,19 @@ tentative peak, the heaviest newborn spot of this scan (a measurement seeding at
 that keeps the spot ``cooperation.track_edge_margin`` inside the next square
 (``keep_in_view_action``; ``search.look_spots`` > 1 keeps as many of the heaviest as one move can
 hold, ``search.look_spot_share`` < 1 lowers the bar, both measured and left at 1 in session 23,
-README issue 15; ``search.spot_move`` 'full' keeps it only by a move as long as the walk's,
-measured and left at 'any' in session 40): a real target is then a tentative peak at the next scan,
-a false alarm leaves nothing and the walk resumes at once. With ``search.peak_look`` 'keep' a
-tentative peak is looked at the same way, by the search move that keeps it in the next square, for
-up to its budget: the walk advances while the peak is scanned (session 37). Nothing is looked at
-during the rejoin cooldown (after an overlap exit or leaving followed targets). A peak that fades
-for a scan (a miss, a near pass) is looked at like a newborn spot: one step of the budget on the
-search move that keeps it, where its velocity takes it, in the next square; back at the next scan
-it is a tentative peak again, gone it is left. Following it with the tracking control for the rest
-of the budget instead (tried, session 16) detected no more on the dev seeds 2001-2100 (persistent
--0.6 points at random and -5.0 at paper_random, cooperative +0.0 at paper_random) and searched 2.4
-points less of the area by k = 100 with two agents (for one step only: 0.9 less); README, issue 15.
+docs/persistent_trials.md; ``search.spot_move`` 'full' keeps it only by a move as long as the
+walk's, measured and left at 'any' in session 40): a real target is then a tentative peak at the
+next scan, a false alarm leaves nothing and the walk resumes at once. With ``search.peak_look``
+'keep' a tentative peak is looked at the same way, by the search move that keeps it in the next
+square, for up to its budget: the walk advances while the peak is scanned (session 37). Nothing is
+looked at during the rejoin cooldown (after an overlap exit or leaving followed targets). A peak
+that fades for a scan (a miss, a near pass) is looked at like a newborn spot: one step of the
+budget on the search move that keeps it, where its velocity takes it, in the next square; back at
+the next scan it is a tentative peak again, gone it is left. Following it with the tracking control
+for the rest of the budget instead (tried, session 16) detected no more on the dev seeds 2001-2100
+(persistent -0.6 points at random and -5.0 at paper_random, cooperative +0.0 at paper_random) and
+searched 2.4 points less of the area by k = 100 with two agents (for one step only: 0.9 less);
+docs/persistent_trials.md.
 Why: one pass of a searching agent gives a target 2-3 scans, too few to confirm it under
 clutter (a tracked target's PHD mass grows by ~1 + g / kappa per scan, and not at all while
 the agent flies over it); and newborns the next square does not cover are dropped

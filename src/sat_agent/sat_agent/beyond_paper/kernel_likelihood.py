@@ -13,7 +13,7 @@ of a cloud of a few hundred particles spread over a metre, so a target's own mea
 find no particle to explain it and seeds a birth instead (dev seeds 2001-2080: 11 of 37 targets
 in a square for three scans or more and never detected; seed 2002's target 4 explained 0.027 of
 a measurement 0.28 m from it). With h = 0.3 m and heavy_peak_confirmation, the targets in a
-square and never detected fell from 174 to 125 on 300 dev seeds (README, issue 15).
+square and never detected fell from 174 to 125 on 300 dev seeds (docs/persistent_trials.md).
 Switch: ``additions.kernel_likelihood`` (off: the sensor's own g, bandwidth 0).
 """
 

@@ -41,7 +41,8 @@ tracked +1.90 points (95 % CI [+0.65, +3.18], Wilcoxon p 0.003), OSPA -0.17 m ([
 p < 0.001), detected +1.99 ([-0.32, +4.20], p 0.09), area searched by k = 100 +0.68 (p <
 0.001); at paper_random (dev seeds 2001-2200) detected +0.75, tracked +0.21, OSPA +0.05 m, none
 significant. On in config/persistent.yaml since; on the reported seeds, paired with the rows
-before it, no move is significant (seeds 1-50 tracked +2.5, held out -0.8; README, issue 15).
+before it, no move is significant (seeds 1-50 tracked +2.5, held out -0.8;
+docs/persistent_trials.md).
 The association's restriction to the square (session 29, a fix kept by a rule written before
 its trial) on fresh dev seeds 6461-6760, paired: detected +1.67 ([+0.33, +3.11], p 0.029),
 tracked +0.30 ([-0.49, +1.14]), OSPA +0.03 m ([-0.02, +0.09]), false-track steps +3.66 (p <

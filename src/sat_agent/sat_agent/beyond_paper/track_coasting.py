@@ -47,7 +47,7 @@ Addition, three parts:
    target does not make it track again: it is coasted and its track refreshed whenever a
    square passes over it. The error is judged from the fit's own residuals, so a clean track
    is left after a few estimates and a noisy one is followed until its velocity is known as
-   well (session 18, dev seeds, README issue 15: against a fixed 20 estimates, the same
+   well (session 18, dev seeds, docs/persistent_trials.md: against a fixed 20 estimates, the same
    detection gain as a fixed 10 without its loss of tracked target-steps).
 
 Coasted targets are reported only (the swarm's estimate, the metrics): the mode counts the

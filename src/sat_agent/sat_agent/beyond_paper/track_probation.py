@@ -8,7 +8,8 @@ Why: the timeout rides out a missed detection of a held target (1 % per scan at 
 while a peak that vanishes right after its confirmation is far likelier clutter. A quicker
 detector (kernel_likelihood, heavy_peak_confirmation) confirms more clutter too: on dev seeds
 2001-2040 it added 13 TRACK steps per run (p 0.006), all on clutter and held by the 5-step
-timeout; with the probation the three together detect +3.5* on 600 dev seeds (README, issue 15).
+timeout; with the probation the three together detect +3.5* on 600 dev seeds
+(docs/persistent_trials.md).
 Switch: ``additions.track_probation`` (off: mode_machine.NoProbation, the timeout alone).
 """
 

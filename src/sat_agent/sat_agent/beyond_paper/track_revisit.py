@@ -42,8 +42,8 @@ at 30-45 (41 %). KAPPA: the fit's own error understates the drift, since its est
 filter's peaks, correlated from step to step and the residuals do not show it: the median of
 error / s is 1.8 there where a Gaussian gives 1.18, and KAPPA = 2 gives P(error > 4 m) = 0.13
 over 5-45 steps against 0.11 found.
-Measured (session 22, by a rule set before the trial; README, issue 15): on fresh dev seeds
-2701-3000 of the random default, paired with config/persistent.yaml without it, tracked +2.2
+Measured (session 22, by a rule set before the trial; docs/persistent_trials.md): on fresh dev
+seeds 2701-3000 of the random default, paired with config/persistent.yaml without it, tracked +2.2
 points of target-steps (95 % CI [+1.0, +3.3]), mean OSPA -0.16 m ([-0.24, -0.09]), detected
 share -0.1 ([-2.1, +1.8]) and 8.6 fewer false-track steps per run: a look that finds nothing
 also drops the coasted report of a target that died.
