@@ -7,7 +7,8 @@ seed's targets, --with-targets keeps them) or the oracle sweep's strips or tour
 (oracle_sweep.py). sat_world_sim/search_coverage.py then scores the squares its agents flew
 against one fixed set of synthetic targets drawn as the random default draws its targets: the
 share some square held during its life and the mean steps from birth to that square. Means over
-the seeds with 95 % t intervals. A diagnostic (docs/persistent_trials.md, session 37): its
+the seeds with 95 % t intervals; then the share of the area some square held by step k and
+where the area left unseen lies. A diagnostic (docs/persistent_trials.md, session 37): its
 figures bound what a pattern lets the filter find, never a reported result.
 
     scripts/with_env.sh python scripts/search_coverage.py [--pattern profile|strips|tour]
@@ -30,16 +31,20 @@ from sat_world_sim.evaluate import set_values
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.oracle_sweep import run_oracle_sweep
 from sat_world_sim.paired_statistics import mean_interval
-from sat_world_sim.search_coverage import coverage, synthetic_targets
+from sat_world_sim.search_coverage import area_seen, coverage, synthetic_targets
 from sat_world_sim.study_design import default_cell, PERSISTENT_LABEL, PERSISTENT_PROFILE
 from sat_world_sim.study_design import scenario_for
 
 ROOT = Path(__file__).resolve().parents[1]
 PATTERNS = ('profile', 'strips', 'tour')
+# The area searched at least once by these steps; the last also splits what is left unseen
+# into the strip within BORDER_STRIP m of the border and the rest (session 46).
+BY_STEPS = (20, 40, 60, 80, 100, 150)
+BORDER_STRIP = 2.0
 
 
 def one_seed(job) -> tuple:
-    """Return (held share, mean delay) of one seed's squares (module docstring)."""
+    """Return held share, mean delay, area seen by each BY_STEPS, unseen near the border, not."""
     args, values, seed = job
     cell = default_cell('random', PERSISTENT_LABEL, profile=PERSISTENT_PROFILE,
                         overrides=values)
@@ -53,9 +58,11 @@ def one_seed(job) -> tuple:
         run = run_oracle_sweep(scenario, params, tour=args.pattern == 'tour')
     targets = synthetic_targets(args.synthetic, args.synthetic_seed, params.area.width,
                                 params.area.height, args.static)
-    found = coverage(targets, ((r.step, r.agent_poses) for r in run.records),
-                     params.sensor.square_side)
-    return found.held_share, found.mean_delay
+    squares = [(r.step, r.agent_poses) for r in run.records]
+    found = coverage(targets, squares, params.sensor.square_side)
+    seen = area_seen(squares, params.sensor.square_side, params.area.width, params.area.height)
+    return ((found.held_share, found.mean_delay) + tuple(seen.share_by(k) for k in BY_STEPS)
+            + seen.unseen_by(BY_STEPS[-1], BORDER_STRIP))
 
 
 def main(argv=None) -> int:
@@ -90,7 +97,7 @@ def main(argv=None) -> int:
     else:
         with Pool(args.jobs) as pool:
             results = pool.map(one_seed, jobs)
-    held, delay = (np.array(part, dtype=float) for part in zip(*results))
+    held, delay, *seen = (np.array(part, dtype=float) for part in zip(*results))
     run = ' '.join([args.pattern + (' with targets' if args.with_targets else '') + ',',
                     f'random default seeds {jobs[0][2]}-{jobs[-1][2]},', args.params]
                    + [f'--set {key}={value}' for key, value in values])
@@ -98,6 +105,12 @@ def main(argv=None) -> int:
     print(f'{run}\n  {args.synthetic} {kind} (seed {args.synthetic_seed}): held by a square '
           f'{mean_interval(100.0 * held).describe()} %, mean steps from birth to it '
           f'{mean_interval(delay).describe()}')
+    print('  area some square held by step k (%): ' + ', '.join(
+        f'k = {k} {mean_interval(100.0 * share).describe(1)}'
+        for k, share in zip(BY_STEPS, seen)))
+    print(f'  unseen by k = {BY_STEPS[-1]} (% of the cells): within {BORDER_STRIP:g} m of the '
+          f'border {mean_interval(100.0 * seen[-2]).describe(1)}, farther in '
+          f'{mean_interval(100.0 * seen[-1]).describe(1)}')
     return 0
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from sat_world_sim.random_scenarios import RANDOM_BORN, RANDOM_LIFETIME
-from sat_world_sim.search_coverage import coverage, first_held, synthetic_targets
+from sat_world_sim.search_coverage import area_seen, coverage, first_held, synthetic_targets
 from sat_world_sim.search_coverage import SyntheticTargets
 
 SCRIPT = runpy.run_path(str(Path(__file__).resolve().parents[1] / 'scripts' /
@@ -46,6 +46,25 @@ def test_a_target_is_not_held_before_its_birth_or_after_its_death():
     assert nothing.held_share == 0.0 and np.isnan(nothing.mean_delay)
 
 
+def test_area_seen_counts_each_cell_from_the_first_square_that_holds_it():
+    # A 20 m x 10 m area of 1 m cells: one square over the left half at step 3, then one over
+    # the middle at step 5 (the right half's cells from x = 10 to 15), never the right edge.
+    seen = area_seen([(1, {}), (3, {1: np.array([5.0, 5.0])}), (5, {2: np.array([10.0, 5.0])})],
+                     SIDE, 20.0, 10.0)
+    assert seen.first.shape == (200,)
+    assert seen.share_by(2) == 0.0
+    assert seen.share_by(3) == pytest.approx(0.5)
+    assert seen.share_by(5) == pytest.approx(0.75)
+    # Unseen by step 5: the 5 columns x > 15. Within 2 m of the border: the columns x > 18
+    # (2 x 10 cells) and the rows y < 2 or y > 8 of the other three (3 x 4); farther: 3 x 6.
+    near, farther = seen.unseen_by(5, 2.0)
+    close = seen.border_distance <= 2.0
+    assert close.sum() == 200 - 16 * 6
+    assert near == pytest.approx(32 / close.sum())
+    assert farther == pytest.approx(18 / (200 - close.sum()))
+    assert seen.border_distance.min() == pytest.approx(0.5)
+
+
 def test_synthetic_targets_are_drawn_as_the_random_default_draws_them():
     drawn = synthetic_targets(2000, 7, 100.0, 80.0)
     assert drawn is synthetic_targets(2000, 7, 100.0, 80.0)      # one draw per worker
@@ -68,6 +87,8 @@ def test_the_script_scores_a_tour_and_refuses_what_it_cannot_run(capsys):
     out = capsys.readouterr().out
     share = float(out.split('held by a square ')[1].split(' %')[0])
     assert 50.0 < share <= 100.0
+    # The tour sweeps every lane by k = 100 (README: the oracle tour).
+    assert 'k = 150 100.0' in out and 'border 0.0' in out
     with pytest.raises(SystemExit):
         SCRIPT['main'](['--pattern', 'strips', '--with-targets'])
     with pytest.raises(SystemExit):

@@ -14,6 +14,10 @@ Held is not detected: a held target still needs the detector (p_D, clutter, conf
 the held share bounds what the pattern lets the filter find. The truth's process noise (1e-5)
 is left out: the synthetic targets walk their straight line exactly. ``static`` sets every
 end point to the start, for the share a pattern's revisits give when nothing moves.
+
+``area_seen`` scores the same squares against the area itself: the first step a square held
+each cell of a 1 m lattice, so the share of the area searched at least once by step k, and where
+the cells no square has held lie (session 46: the walks leave the border strip unseen).
 """
 
 from dataclasses import dataclass
@@ -97,3 +101,38 @@ def first_held(targets: SyntheticTargets, squares: Iterable[Tuple[int, Mapping[i
 def coverage(targets: SyntheticTargets, squares, side: float) -> Coverage:
     """Held share and mean delay of the synthetic targets under a run's squares."""
     return Coverage.of(targets, first_held(targets, squares, side))
+
+
+@dataclass(frozen=True)
+class AreaSeen:
+    """The first step some square held each lattice cell's centre (-1: never); its border gap."""
+
+    first: np.ndarray            # (cells,) int
+    border_distance: np.ndarray  # (cells,) m from the cell's centre to the area's nearest edge
+
+    def share_by(self, step: int) -> float:
+        """Share of the area some square held at or before the step."""
+        return float(((self.first >= 0) & (self.first <= step)).mean())
+
+    def unseen_by(self, step: int, near: float) -> Tuple[float, float]:
+        """Shares of the cells within near of the border, and of those farther, unseen by step."""
+        unseen = (self.first < 0) | (self.first > step)
+        close = self.border_distance <= near
+        return float(unseen[close].mean()), float(unseen[~close].mean())
+
+
+def area_seen(squares: Iterable[Tuple[int, Mapping[int, object]]], side: float, width: float,
+              height: float, cell: float = 1.0) -> AreaSeen:
+    """Score a run's squares (first_held's) against a lattice of cell-sized cells of the area."""
+    x, y = np.meshgrid(np.arange(cell / 2, width, cell), np.arange(cell / 2, height, cell))
+    centres = np.column_stack([x.ravel(), y.ravel()])
+    first = np.full(len(centres), -1, dtype=int)
+    for step, poses in squares:
+        if not len(poses):
+            continue
+        poses = np.array([np.asarray(p, dtype=float) for p in poses.values()])
+        inside = sensor_model.in_sensing_square(centres[:, None, :], poses[None], side).any(axis=1)
+        first[inside & (first < 0)] = step
+    border = np.minimum.reduce([centres[:, 0], width - centres[:, 0], centres[:, 1],
+                                height - centres[:, 1]])
+    return AreaSeen(first, border)
