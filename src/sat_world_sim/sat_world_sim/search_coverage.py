@@ -27,6 +27,8 @@ from typing import Iterable, Mapping, Tuple
 import numpy as np
 
 from sat_agent import sensor_model
+from sat_agent.config import AreaParams
+from sat_agent.search_density import Lattice
 from sat_world_sim.random_scenarios import random_target
 
 
@@ -123,9 +125,8 @@ class AreaSeen:
 
 def area_seen(squares: Iterable[Tuple[int, Mapping[int, object]]], side: float, width: float,
               height: float, cell: float = 1.0) -> AreaSeen:
-    """Score a run's squares (first_held's) against a lattice of cell-sized cells of the area."""
-    x, y = np.meshgrid(np.arange(cell / 2, width, cell), np.arange(cell / 2, height, cell))
-    centres = np.column_stack([x.ravel(), y.ravel()])
+    """Score a run's squares (first_held's) against the search density's lattice of the area."""
+    centres = Lattice.for_area(AreaParams(width=width, height=height), cell).centers()
     first = np.full(len(centres), -1, dtype=int)
     for step, poses in squares:
         if not len(poses):
