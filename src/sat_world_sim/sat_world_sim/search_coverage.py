@@ -80,6 +80,11 @@ class Coverage:
         return cls(float(held.mean()) if len(first) else float('nan'), float(delay))
 
 
+def _pose_array(poses: Mapping[int, object]) -> np.ndarray:
+    """(agents, 2) the step's poses of a StepRecord.agent_poses mapping."""
+    return np.array([np.asarray(p, dtype=float) for p in poses.values()])
+
+
 def first_held(targets: SyntheticTargets, squares: Iterable[Tuple[int, Mapping[int, object]]],
                side: float) -> np.ndarray:
     """Return each target's first step in some square, -1 if none held it.
@@ -94,8 +99,7 @@ def first_held(targets: SyntheticTargets, squares: Iterable[Tuple[int, Mapping[i
         alive, points = alive[waiting], points[waiting]
         if not len(alive) or not len(poses):
             continue
-        centres = np.array([np.asarray(p, dtype=float) for p in poses.values()])
-        inside = sensor_model.in_sensing_square(points[:, None, :], centres[None], side)
+        inside = sensor_model.in_sensing_square(points[:, None, :], _pose_array(poses)[None], side)
         first[alive[inside.any(axis=1)]] = step
     return first
 
@@ -112,13 +116,17 @@ class AreaSeen:
     first: np.ndarray            # (cells,) int
     border_distance: np.ndarray  # (cells,) m from the cell's centre to the area's nearest edge
 
+    def seen_by(self, step: int) -> np.ndarray:
+        """Bool mask of the cells some square held at or before the step."""
+        return (self.first >= 0) & (self.first <= step)
+
     def share_by(self, step: int) -> float:
         """Share of the area some square held at or before the step."""
-        return float(((self.first >= 0) & (self.first <= step)).mean())
+        return float(self.seen_by(step).mean())
 
     def unseen_by(self, step: int, near: float) -> Tuple[float, float]:
         """Shares of the cells within near of the border, and of those farther, unseen by step."""
-        unseen = (self.first < 0) | (self.first > step)
+        unseen = ~self.seen_by(step)
         close = self.border_distance <= near
         return float(unseen[close].mean()), float(unseen[~close].mean())
 
@@ -131,8 +139,8 @@ def area_seen(squares: Iterable[Tuple[int, Mapping[int, object]]], side: float, 
     for step, poses in squares:
         if not len(poses):
             continue
-        poses = np.array([np.asarray(p, dtype=float) for p in poses.values()])
-        inside = sensor_model.in_sensing_square(centres[:, None, :], poses[None], side).any(axis=1)
+        inside = sensor_model.in_sensing_square(centres[:, None, :], _pose_array(poses)[None],
+                                                side).any(axis=1)
         first[inside & (first < 0)] = step
     border = np.minimum.reduce([centres[:, 0], width - centres[:, 0], centres[:, 1],
                                 height - centres[:, 1]])
