@@ -7,9 +7,10 @@ seed's targets, --with-targets keeps them) or the oracle sweep's strips or tour
 (oracle_sweep.py). sat_world_sim/search_coverage.py then scores the squares its agents flew
 against one fixed set of synthetic targets drawn as the random default draws its targets: the
 share some square held during its life and the mean steps from birth to that square. Means over
-the seeds with 95 % t intervals; then the share of the area some square held by step k and
-where the area left unseen lies. A diagnostic (docs/persistent_trials.md, session 37): its
-figures bound what a pattern lets the filter find, never a reported result.
+the seeds with 95 % t intervals; then the share of the area some square held by step k, where
+the area left unseen lies and the area a step brings in that no square held for W steps. A
+diagnostic (docs/persistent_trials.md, session 37): its figures bound what a pattern lets the
+filter find, never a reported result.
 
     scripts/with_env.sh python scripts/search_coverage.py [--pattern profile|strips|tour]
         [--with-targets] [--static] [--set KEY=VALUE ...] [--seeds 8] [--first-seed 1]
@@ -41,10 +42,17 @@ PATTERNS = ('profile', 'strips', 'tour')
 # into the strip within BORDER_STRIP m of the border and the rest (session 46).
 BY_STEPS = (20, 40, 60, 80, 100, 150)
 BORDER_STRIP = 2.0
+# The area a step brings in that no square held in this many steps before (session 47): the
+# tour's even phasing against the walks' returns to younger area.
+FRESH_WINDOWS = (10, 30, 60)
 
 
 def one_seed(job) -> tuple:
-    """Return held share, mean delay, area seen by each BY_STEPS, unseen near the border, not."""
+    """Return one seed's figures, in the order main prints them.
+
+    Held share, mean delay, area seen by each BY_STEPS, unseen near the border and farther in,
+    the area brought in per agent-step unseen for each FRESH_WINDOWS.
+    """
     args, values, seed = job
     cell = default_cell('random', PERSISTENT_LABEL, profile=PERSISTENT_PROFILE,
                         overrides=values)
@@ -60,9 +68,10 @@ def one_seed(job) -> tuple:
                                 params.area.height, args.static)
     squares = [(r.step, r.agent_poses) for r in run.records]
     found = coverage(targets, squares, params.sensor.square_side)
-    seen = area_seen(squares, params.sensor.square_side, params.area.width, params.area.height)
+    seen = area_seen(squares, params.sensor.square_side, params.area.width, params.area.height,
+                     windows=FRESH_WINDOWS)
     return ((found.held_share, found.mean_delay) + tuple(seen.share_by(k) for k in BY_STEPS)
-            + seen.unseen_by(BY_STEPS[-1], BORDER_STRIP))
+            + seen.unseen_by(BY_STEPS[-1], BORDER_STRIP) + seen.fresh)
 
 
 def main(argv=None) -> int:
@@ -98,6 +107,7 @@ def main(argv=None) -> int:
         with Pool(args.jobs) as pool:
             results = pool.map(one_seed, jobs)
     held, delay, *seen = (np.array(part, dtype=float) for part in zip(*results))
+    seen, fresh = seen[:-len(FRESH_WINDOWS)], seen[-len(FRESH_WINDOWS):]
     run = ' '.join([args.pattern + (' with targets' if args.with_targets else '') + ',',
                     f'random default seeds {jobs[0][2]}-{jobs[-1][2]},', args.params]
                    + [f'--set {key}={value}' for key, value in values])
@@ -111,6 +121,9 @@ def main(argv=None) -> int:
     print(f'  unseen by k = {BY_STEPS[-1]} (% of the cells): within {BORDER_STRIP:g} m of the '
           f'border {mean_interval(100.0 * seen[-2]).describe(1)}, farther in '
           f'{mean_interval(100.0 * seen[-1]).describe(1)}')
+    print('  area a step brings in that no square held in the W steps before (m^2 per '
+          'agent-step): ' + ', '.join(f'W = {window} {mean_interval(area).describe(1)}'
+                                      for window, area in zip(FRESH_WINDOWS, fresh)))
     return 0
 
 

@@ -65,6 +65,25 @@ def test_area_seen_counts_each_cell_from_the_first_square_that_holds_it():
     assert seen.border_distance.min() == pytest.approx(0.5)
 
 
+def test_fresh_area_counts_what_no_square_held_in_the_window_before():
+    # A 100 m x 10 m area: a square at x = 5 (100 cells, never seen), one 4 m on (40 new
+    # cells), the same pose again (nothing new), then, after six steps without agents, there
+    # once more: new for a 5-step window, not for a 10-step one.
+    at = {1: np.array([5.0, 5.0])}
+    on = {1: np.array([9.0, 5.0])}
+    seen = area_seen([(1, at), (2, on), (3, on), (4, {}), (10, on)], SIDE, 100.0, 10.0,
+                     windows=(1, 5, 10))
+    assert seen.fresh_by(1) == pytest.approx((100 + 40 + 0 + 100) / 4)
+    assert seen.fresh_by(5) == pytest.approx((100 + 40 + 0 + 100) / 4)
+    assert seen.fresh_by(10) == pytest.approx((100 + 40 + 0 + 0) / 4)
+    # Two agents on one square bring its cells in once, over two agent-steps.
+    both = area_seen([(1, {1: at[1], 2: at[1]})], SIDE, 100.0, 10.0, windows=(1,))
+    assert both.fresh_by(1) == pytest.approx(100 / 2)
+    assert area_seen([(1, at)], SIDE, 100.0, 10.0).fresh == ()
+    with pytest.raises(ValueError, match='at least 1'):
+        area_seen([(1, at)], SIDE, 100.0, 10.0, windows=(0,))
+
+
 def test_synthetic_targets_are_drawn_as_the_random_default_draws_them():
     drawn = synthetic_targets(2000, 7, 100.0, 80.0)
     assert drawn is synthetic_targets(2000, 7, 100.0, 80.0)      # one draw per worker
@@ -89,6 +108,10 @@ def test_the_script_scores_a_tour_and_refuses_what_it_cannot_run(capsys):
     assert 50.0 < share <= 100.0
     # The tour sweeps every lane by k = 100 (README: the oracle tour).
     assert 'k = 150 100.0' in out and 'border 0.0' in out
+    # Evenly phased on one closed tour, each step brings in nearly a square's v a = 40 m^2
+    # that no square held for 60 steps (the lap's period over four agents is 64).
+    fresh = float(out.split('W = 60 ')[1].split(' ')[0])
+    assert 30.0 < fresh <= 40.0
     with pytest.raises(SystemExit):
         SCRIPT['main'](['--pattern', 'strips', '--with-targets'])
     with pytest.raises(SystemExit):
