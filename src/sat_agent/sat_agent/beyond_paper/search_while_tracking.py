@@ -27,7 +27,12 @@ reported seeds 1-50 and 1001-1050 -10 and -9 points, neither significant: with t
 a tracker that also searches may find the other). At random it loses tracks (seeds 1-50: 79 %
 of the target-steps after a target's first detection are tracked with it, 88 % without) and
 finds no more targets; so config/persistent.yaml leaves it off, and the persistent profile's
-ablation (study_design.persistent_ablation_cells) runs the profile with it.
+ablation (study_design.persistent_ablation_cells) runs the profile with it. Those figures are of
+the profile before track coasting (a tracker then followed until it lost its targets). On the
+profile of session 32, where a follow ends once the track's velocity is known, rule 28
+(docs/persistent_trials.md, session 48; fresh dev seeds 13627-13926, 300, paired, bootstrap
+95 % CIs) found the same direction: OSPA +0.17 m [+0.04, +0.31] (Wilcoxon p 0.033), detected
+-2.24 points [-5.14, +0.66], tracked -2.04 [-4.20, +0.03] (both p 0.12); it stays off.
 Switch: ``additions.search_while_tracking`` (off: tracking_control.best_score).
 """
 
