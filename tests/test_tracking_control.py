@@ -214,3 +214,19 @@ def test_search_while_tracking_switch_off_or_zero_tolerance_takes_the_best_score
                                         _worth_to_the_north(zero))[0] == best
     on = PARAMS.with_overrides({'additions.search_while_tracking': True})
     assert TrackingControl(on).action(cloud, estimate, POSE, _worth_to_the_north(on))[0] != best
+
+
+@pytest.mark.parametrize('scope, look_searches', [('all', True), ('track', False)])
+def test_search_while_tracking_scope_decides_whether_a_look_searches(scope, look_searches):
+    # In TRACK the search worth moves the action whatever the scope; a searching agent's look
+    # at tentative peaks is moved by it only with the scope 'all'.
+    target = POSE + np.array([1.0, 0.0])
+    cloud, estimate = _cloud(target, spread=0.3), _estimate(target)
+    best, _ = CONTROL.action(cloud, estimate, POSE)
+    params = PARAMS.with_overrides({'additions.search_while_tracking': True,
+                                    'cooperation.track_search_scope': scope})
+    control, search = TrackingControl(params), _worth_to_the_north(params)
+    tracking, _ = control.action(cloud, estimate, POSE, search)
+    looking, _ = control.action(cloud, estimate, POSE, search, look=True)
+    assert tracking != best
+    assert looking == (tracking if look_searches else best)

@@ -309,7 +309,7 @@ class Agent:
                 self.extractor.estimate(self.filter.targets, pose)[0], self._last_report,
                 view.reports)
             action, _ = self.tracking.action(self.filter.targets, targets, pose,
-                                             self.filter.search)
+                                             self.filter.search, look=mode == Mode.SEARCH)
             plan = self.planner.walk_points() if mode == Mode.SEARCH else np.zeros((0, 2))
             return action, candidate_poses(pose, self.params.actions)[action], plan
         if self.baseline is not None:

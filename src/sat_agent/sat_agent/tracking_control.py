@@ -105,21 +105,25 @@ class TrackingControl:
         self._preferred = standoff_mask if additions.track_standoff else every_action
         self._choose = (SearchWhileTracking(params.cooperation.track_search_tolerance)
                         if additions.search_while_tracking else best_score)
+        self._search_in_looks = params.cooperation.track_search_scope == 'all'
         self._bandwidth = filter_bandwidth(params)   # the filter's g (kernel_likelihood)
         # The pseudo updates' norm (module docstring); scripts/bench_filter.py sets np.hypot
         # to time the control as it was.
         self.norm = sensor_model.plain_hypot
 
     def action(self, predicted: ParticlePHD, estimates: MultiTargetEstimate, pose,
-               search: Optional[SearchDensity] = None):
+               search: Optional[SearchDensity] = None, look: bool = False):
         """Return (action index, scores (n_actions,)) maximising Eqn. track_control.
 
         Inadmissible actions score -inf. The argmax runs over the admissible actions the mask
         prefers when there are any, else over all admissible actions. Ties go to the lowest
         index (np.argmax), so when no action is informative (all scores 0) the agent stays
         (action 0) if staying is preferred. search: the search density predicted to k+1, for
-        additions.search_while_tracking.
+        additions.search_while_tracking; look: a searching agent's look at tentative peaks,
+        where it applies only with cooperation.track_search_scope 'all'.
         """
+        if look and not self._search_in_looks:
+            search = None
         params = self.params
         sensor = params.sensor
         poses = actions.candidate_poses(pose, params.actions)
