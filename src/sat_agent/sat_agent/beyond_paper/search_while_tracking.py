@@ -33,6 +33,10 @@ profile of session 32, where a follow ends once the track's velocity is known, r
 (docs/persistent_trials.md, session 48; fresh dev seeds 13627-13926, 300, paired, bootstrap
 95 % CIs) found the same direction: OSPA +0.17 m [+0.04, +0.31] (Wilcoxon p 0.033), detected
 -2.24 points [-5.14, +0.66], tracked -2.04 [-4.20, +0.03] (both p 0.12); it stays off.
+Scope: ``cooperation.track_search_scope`` 'all' (as built and measured above) also moves a
+searching agent's look at tentative peaks, which the tracking control places; 'track' leaves
+the looks on the best score (TrackingControl.action). Its pilot on dev seeds 13527-13626 moved
+nothing (OSPA +0.02 m, detected +0.7, tracked +0.8 points).
 Switch: ``additions.search_while_tracking`` (off: tracking_control.best_score).
 """
 
