@@ -100,13 +100,18 @@ def wait_matched(node, endpoints, timeout: float, what: str, count: int = 1):
     spin_until(node, lambda: all(map(matched, endpoints)), timeout, what)
 
 
-def wait_exit(process, timeout: float, what: str) -> int:
-    """Wait for process to end and return its exit code; fail naming what after the bound."""
+def wait_exit(process, timeout: float, what: str, others=()) -> int:
+    """Wait for process to end and return its exit code; fail naming what after the bound.
+
+    The failure shows the process's log and the ends of the others' (its peers in the run).
+    """
     limit = scaled(timeout)
     try:
         return process.wait(timeout=limit)
     except subprocess.TimeoutExpired:
-        raise AssertionError(f'{_waited(what, limit)}\n{log_tail(process)}') from None
+        peers = ''.join(f'\n--- {Path(p.args[0]).name} (pid {p.pid}):\n{log_tail(p, 1500)}'
+                        for p in others)
+        raise AssertionError(f'{_waited(what, limit)}\n{log_tail(process)}{peers}') from None
 
 
 def wait_for_text(path: Path, text: str, timeout: float, what: str, processes=()):

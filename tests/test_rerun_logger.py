@@ -192,10 +192,11 @@ def test_logger_node_records_a_short_swarm_run(tmp_path):
                 '--params-file', str(PARAMS), '-p', f'agent_id:={i}']
 
     with started(logger, tmp_path / 'logger.log') as log_process, \
-            started(world, tmp_path / 'world.log'), \
-            started(agent(1), tmp_path / 'a1.log'), \
-            started(agent(2), tmp_path / 'a2.log'):
-        code = wait_exit(log_process, 200, 'the logger writing run.rrd after the run')
+            started(world, tmp_path / 'world.log') as world_process, \
+            started(agent(1), tmp_path / 'a1.log') as a1, \
+            started(agent(2), tmp_path / 'a2.log') as a2:
+        code = wait_exit(log_process, 200, 'the logger writing run.rrd after the run',
+                         others=(world_process, a1, a2))
     assert code == 0, (tmp_path / 'logger.log').read_text()[-3000:]
     logged, static = rrd_contents(run_dir / 'run.rrd')
     for entity in expected_per_step(AGENTS):

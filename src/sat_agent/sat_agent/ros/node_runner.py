@@ -8,6 +8,7 @@ callback per radio message, so with 16 agents the waits cost more CPU than the w
 rclpy falls back to the SingleThreadedExecutor.
 """
 
+import faulthandler
 import signal
 import sys
 
@@ -28,6 +29,12 @@ SPIN_TIMEOUT_S = 0.1
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 # At the end of a run, a node exits once its readers acknowledged its last messages, or after this.
 FINAL_ACK_TIMEOUT_S = 10.0
+# Teardown (the guards' final counters, each waiting at most
+# input_guard.FINAL_DIAGNOSTICS_ACK_S; the nodes' own closing: the recorder's bag, the logger's
+# flush to its file and viewer; destroying the nodes; shutting rclpy down) takes seconds. One
+# still running after this long is stuck in the middleware: the process then dumps every
+# thread's stack to stderr and exits with status 1 instead of hanging its launcher.
+TEARDOWN_LIMIT_S = 120.0
 
 
 def steady_timer(node, period: float, callback):
@@ -73,7 +80,9 @@ def run_nodes(name: str, factory, args=None) -> int:
     Ctrl-C, SIGTERM and external shutdown end cleanly with 0; a ValueError or OSError while
     building the nodes (bad parameters, a missing or malformed scenario or YAML file) is printed
     as one line naming the problem and gives 2; finish_run from a callback ends the spin with
-    its code. Any other error is a bug and propagates with its traceback.
+    its code. Any other error is a bug and propagates with its traceback. A stop that no node
+    asked for is logged with its cause (the signal, the shutdown, the exception), and a teardown
+    stuck for TEARDOWN_LIMIT_S dumps every thread's stack and exits with 1.
 
     The stop signals only set a flag that the loop reads between callbacks. rclpy's own handlers
     raise KeyboardInterrupt wherever the main thread is, and inside a callback the
@@ -100,15 +109,34 @@ def run_nodes(name: str, factory, args=None) -> int:
         while code is None and not stop_requests and rclpy.ok():
             executor.spin_once(timeout_sec=SPIN_TIMEOUT_S)
             code = _exit_code(nodes)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        if code is None:
+            _log_stop(nodes, stop_requests)
+    except (KeyboardInterrupt, ExternalShutdownException) as stop:
+        _log_stop(nodes, stop_requests, stop)
     finally:
+        # exit=True: faulthandler ends the process with status 1 after the dump.
+        faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S, exit=True)
         for node in nodes:
             if rclpy.ok():
                 for guard in getattr(node, 'sat_guards', ()):
                     guard.publish_final()
             node.destroy_node()
         rclpy.try_shutdown()
+        faulthandler.cancel_dump_traceback_later()
         for number, handler in previous.items():
             signal.signal(number, handler)
     return code or 0
+
+
+def _log_stop(nodes, stop_requests, stop=None):
+    """Say why a process stops when no node asked to finish: a signal, a shutdown, an error."""
+    if stop_requests:
+        reason = f'stopping on {signal.Signals(stop_requests[0]).name}'
+    elif stop is not None:
+        reason = f'stopping on {type(stop).__name__}'
+    else:
+        reason = 'stopping: the ROS context was shut down'
+    if nodes:
+        nodes[0].get_logger().info(reason)
+    else:
+        print(reason, file=sys.stderr, flush=True)
