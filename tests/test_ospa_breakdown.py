@@ -1,7 +1,7 @@
 import numpy as np
+from profiles import persistent_eight_headings
 import pytest
 
-from sat_agent.config import load_params_file
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.metrics import compute_metrics, MetricsConfig, StepRecord
 from sat_world_sim.ospa_breakdown import coasted_tracks, false_sources, ospa_without
@@ -88,7 +88,7 @@ def test_ospa_without_a_source_drops_its_reports_from_every_agent():
 
 
 def test_the_coasted_rows_are_those_of_the_coasted_tracks_in_order():
-    params = load_params_file('config/persistent.yaml')
+    params = persistent_eight_headings()
     # Seed 10: by step 52 an agent coasts two tracks at once, so their order is checked too.
     scenario = random_scenario(10, 4, 60)
     swarm = InProcessSwarm(scenario, params)
@@ -106,8 +106,7 @@ def test_the_coasted_rows_are_those_of_the_coasted_tracks_in_order():
 def test_false_sources_scores_the_metrics_ospa_and_what_each_source_costs():
     # Seed 6: in 60 steps a coasted track's fit drifts more than c from its live target.
     scenario = random_scenario(6, 4, 60)
-    found = false_sources(InProcessSwarm(scenario, load_params_file('config/persistent.yaml')),
-                          scenario.steps)
+    found = false_sources(InProcessSwarm(scenario, persistent_eight_headings()), scenario.steps)
     metrics = compute_metrics(found.records, scenario.name, scenario.seed)['summary']
     assert found.mean_ospa == pytest.approx(metrics['mean_ospa'])
     assert what_if_ospa(found.records)['reported'] == pytest.approx(metrics['mean_ospa'])

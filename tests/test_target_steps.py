@@ -1,5 +1,7 @@
 """Where a run's target-steps go (sat_world_sim/target_steps.py)."""
 
+from profiles import persistent_eight_headings
+
 from sat_agent.config import load_params_file
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.metrics import compute_metrics
@@ -31,7 +33,7 @@ def _ledger_of(seed: int, steps: int, params):
 
 def test_the_ledger_agrees_with_the_metrics_and_names_why_found_targets_go_untracked():
     # Seed 8 of the persistent profile: in 150 steps found targets go untracked four ways.
-    counts, metrics = _ledger_of(8, 150, load_params_file('config/persistent.yaml'))
+    counts, metrics = _ledger_of(8, 150, persistent_eight_headings())
     assert set(counts) <= set(CATEGORIES)
     assert sum(counts.values()) == sum(step['n_true'] for step in metrics['steps'])
     assert counts['tracked'] == sum(step['n_tracked'] for step in metrics['steps'])
