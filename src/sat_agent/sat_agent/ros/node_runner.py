@@ -114,18 +114,31 @@ def run_nodes(name: str, factory, args=None) -> int:
     except (KeyboardInterrupt, ExternalShutdownException) as stop:
         _log_stop(nodes, stop_requests, stop)
     finally:
-        # exit=True: faulthandler ends the process with status 1 after the dump.
-        faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S, exit=True)
+        try:
+            _teardown(nodes)
+        finally:
+            for number, handler in previous.items():
+                signal.signal(number, handler)
+    return code or 0
+
+
+def _teardown(nodes):
+    """Publish the guards' final counters, destroy the nodes, shut rclpy down: bounded.
+
+    The bound is armed for this teardown only: an error raised on the way disarms it, so a
+    process ending on that error is not killed later by a stale dump.
+    """
+    # exit=True: faulthandler ends the process with status 1 after the dump.
+    faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S, exit=True)
+    try:
         for node in nodes:
             if rclpy.ok():
                 for guard in getattr(node, 'sat_guards', ()):
                     guard.publish_final()
             node.destroy_node()
         rclpy.try_shutdown()
+    finally:
         faulthandler.cancel_dump_traceback_later()
-        for number, handler in previous.items():
-            signal.signal(number, handler)
-    return code or 0
 
 
 def _log_stop(nodes, stop_requests, stop=None):
