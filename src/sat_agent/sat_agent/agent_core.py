@@ -63,6 +63,7 @@ from sat_agent.beyond_paper.investigation import (
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
 from sat_agent.beyond_paper.track_coasting import NoCoasting, TrackCoasting
+from sat_agent.beyond_paper.sweeping_move import sweeping_action
 from sat_agent.beyond_paper.track_release import TrackRelease
 from sat_agent.beyond_paper.track_revisit import NoRevisit, TrackRevisit
 from sat_agent.config import ParameterError, SatParams
@@ -316,6 +317,8 @@ class Agent:
             action, goal, plan = self.baseline.choose(pose, view)
         else:
             action, goal, plan = self.planner.choose(pose)
+            if self.params.search.sweep_slack > 0.0:
+                action = sweeping_action(pose, goal, self.params, self.filter.search)
             revisit = (self.revisit.revisit(view.step, pose, self.coasting.tracks, goal)
                        if look.keep is None else None)
             if revisit is not None:
