@@ -1,5 +1,6 @@
 """The sweeping search move (beyond_paper/sweeping_move.py, search.sweep_slack)."""
 
+from conftest import REPO_ROOT
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
@@ -11,15 +12,13 @@ from sat_agent.config import load_params_file, SatParams
 from sat_agent.search_density import Lattice, SearchDensity
 from sat_agent.search_planning import action_costs, search_action
 
-from ros_harness import REPO
-
-PERSISTENT = load_params_file(REPO / 'config' / 'persistent.yaml')
+PERSISTENT = load_params_file(REPO_ROOT / 'config' / 'persistent.yaml')
 POSE = np.array([50.0, 50.0])
 EAST = np.array([90.0, 50.0])
 
 
 def _density(params, u=None, seed=None):
-    """A density of u = -ln v: u itself, or exponential draws of seed (None: searched)."""
+    """Return a density of u = -ln v: u, or exponential draws of seed (neither: searched)."""
     density = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing),
                             params)
     shape = density.values.shape

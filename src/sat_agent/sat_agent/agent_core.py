@@ -62,8 +62,8 @@ from sat_agent.beyond_paper.investigation import (
     Investigation, keep_in_view_action, Look, NO_LOOK)
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
-from sat_agent.beyond_paper.track_coasting import NoCoasting, TrackCoasting
 from sat_agent.beyond_paper.sweeping_move import sweeping_action
+from sat_agent.beyond_paper.track_coasting import NoCoasting, TrackCoasting
 from sat_agent.beyond_paper.track_release import TrackRelease
 from sat_agent.beyond_paper.track_revisit import NoRevisit, TrackRevisit
 from sat_agent.config import ParameterError, SatParams

@@ -356,9 +356,9 @@ class SearchParams:
         "'any' admissible move, 'full' only a move as long as the walk's (the walk may turn "
         'for a spot but never slows down or stands)', choices=SPOT_MOVES)
     sweep_slack: float = param(
-        0.0, 'how much farther (m) from the walk\'s next node than the nearest admissible '
+        0.0, "how much farther (m) from the walk's next node than the nearest admissible "
         'pose a search move may end, to take the square holding the most undetected targets '
-        '(0: the paper\'s xi_search; beyond_paper/sweeping_move.py)', low=0, high=MANY)
+        "(0: the paper's xi_search; beyond_paper/sweeping_move.py)", low=0, high=MANY)
     # Follows the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
     replan_period: int = param(
         10, 'additions.persistent_planning: every agent in SEARCH replans (jointly with the '
