@@ -34,7 +34,8 @@ def _worth_to_the_north(params):
     density = _density(params)
     u = np.zeros(density.values.shape)
     u[56:, :] = 1e-3    # rows are y (1 m lattice)
-    return _density(params, u)
+    density.values = np.exp(-u)
+    return density
 
 
 @pytest.mark.parametrize('slack', [1.2, 2.5])
