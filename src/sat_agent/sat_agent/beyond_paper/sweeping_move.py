@@ -8,8 +8,8 @@ sweep_slack metres farther from the node than the nearest one, the one whose squ
 the most expected undetected targets, sum of u = -ln v over its cells
 (SearchDensity.square_worth; beyond_paper/regrowing_density.py). Ties go to the nearer pose,
 then to the lower action index, as in xi_search. Each step still closes at least the nearest
-pose's progress minus the slack (at the top speed of 4 m a step and 16 headings, 2.8 m for a
-slack of 1.2 m), so the walk reaches its node; 0 is the paper's move.
+pose's progress minus the slack (at the top speed of 4 m a step and 16 headings, about 2.7 m
+for a slack of 1.2 m), so the walk reaches its node; 0 is the paper's move.
 Why: a walk between two nodes often crosses ground another square searched a few steps
 before (docs/persistent_trials.md, session 47: a third of the area the walks bring in has gone
 unseen 60 steps); bending within the slack brings fresh ground into the square for the same
