@@ -1,10 +1,10 @@
 """Profiles the tests run on that are not a config file as it is."""
 
-from pathlib import Path
+from conftest import REPO_ROOT
 
 from sat_agent.config import load_params_file
 
-PERSISTENT_FILE = Path(__file__).resolve().parent.parent / 'config' / 'persistent.yaml'
+PERSISTENT_FILE = REPO_ROOT / 'config' / 'persistent.yaml'
 
 
 def persistent_eight_headings():
