@@ -86,3 +86,35 @@ def test_a_teardown_that_hangs_dumps_the_stacks_and_exits_1():
                             capture_output=True, text=True, timeout=scaled(30))
     assert result.returncode == 1, result.stdout + result.stderr
     assert 'Timeout' in result.stderr and 'in destroy_node' in result.stderr, result.stderr
+
+
+HUNG_EXIT_NODE = '''
+import atexit, sys, threading
+from rclpy.node import Node
+from sat_agent.ros import node_runner
+
+node_runner.TEARDOWN_LIMIT_S = 1.0
+
+def never_ends():
+    threading.Event().wait()   # a library's flush that never returns
+
+class Done(Node):
+    def __init__(self):
+        super().__init__('hung_exit')
+        self.create_timer(0.05, lambda: node_runner.finish_run(self, 0))
+
+{hang}
+sys.exit(node_runner.run_nodes('hung_exit', Done))
+'''
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize('hang', ['threading.Thread(target=never_ends).start()',
+                                  'atexit.register(never_ends)'])
+def test_an_exit_that_hangs_after_a_clean_teardown_dumps_the_stacks_and_exits_1(hang):
+    # The interpreter joins the threads left running, then runs the atexit handlers: either
+    # may hold a process whose nodes are all gone.
+    result = subprocess.run([sys.executable, '-c', HUNG_EXIT_NODE.format(hang=hang)],
+                            capture_output=True, text=True, timeout=scaled(30))
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert 'Timeout' in result.stderr and 'in never_ends' in result.stderr, result.stderr

@@ -33,7 +33,9 @@ FINAL_ACK_TIMEOUT_S = 10.0
 # input_guard.FINAL_DIAGNOSTICS_ACK_S; the nodes' own closing: the recorder's bag, the logger's
 # flush to its file and viewer; destroying the nodes; shutting rclpy down) takes seconds. One
 # still running after this long is stuck in the middleware: the process then dumps every
-# thread's stack to stderr and exits with status 1 instead of hanging its launcher.
+# thread's stack to stderr and exits with status 1 instead of hanging its launcher. The same
+# bound holds for the interpreter's exit after run_nodes returns (a thread that never ends, an
+# atexit handler such as a library's flush).
 TEARDOWN_LIMIT_S = 120.0
 
 
@@ -84,6 +86,11 @@ def run_nodes(name: str, factory, args=None) -> int:
     asked for is logged with its cause (the signal, the shutdown, the exception), and a teardown
     stuck for TEARDOWN_LIMIT_S dumps every thread's stack and exits with 1.
 
+    run_nodes is a process's main loop (every node's main returns it to sys.exit): it returns
+    with the same bound armed for the interpreter's exit, which joins the threads left running
+    and runs the atexit handlers. CI once saw a logger write its run.rrd and never exit; if
+    that was the exit, the dump now says which thread held it.
+
     The stop signals only set a flag that the loop reads between callbacks. rclpy's own handlers
     raise KeyboardInterrupt wherever the main thread is, and inside a callback the
     EventsExecutor reports that as a FATAL exception before the process ends.
@@ -119,6 +126,8 @@ def run_nodes(name: str, factory, args=None) -> int:
         finally:
             for number, handler in previous.items():
                 signal.signal(number, handler)
+            # Not cancelled: the process ends before it fires unless its exit hangs.
+            faulthandler.dump_traceback_later(TEARDOWN_LIMIT_S, exit=True)
     return code or 0
 
 
