@@ -17,14 +17,12 @@ POSE = np.array([50.0, 50.0])
 EAST = np.array([90.0, 50.0])
 
 
-def _density(params, u=None, seed=None):
-    """Return a density of u = -ln v: u, or exponential draws of seed (neither: searched)."""
+def _density(params, seed=None):
+    """Return a density whose u = -ln v are exponential draws of seed (None: all searched)."""
     density = SearchDensity(Lattice.for_area(params.area, params.search.lattice_spacing),
                             params)
     shape = density.values.shape
-    if u is None:
-        u = (np.zeros(shape) if seed is None
-             else np.random.default_rng(seed).exponential(1e-3, shape))
+    u = np.zeros(shape) if seed is None else np.random.default_rng(seed).exponential(1e-3, shape)
     density.values = np.exp(-u)
     return density
 
