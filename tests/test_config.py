@@ -30,14 +30,17 @@ def test_the_strict_profile_is_the_default_with_every_addition_off():
     # The default is config/paper.yaml: every addition on but persistent search-and-track's,
     # which config/persistent.yaml switches on (issue 15), search while tracking aside (built,
     # measured and left off: the file says why); that profile also steers with 16 headings
-    # (rule 30, docs/persistent_trials.md), its one value outside the switches.
+    # (rule 30) and sets the five levers of arm S4 (rules 33-34, docs/persistent_trials.md),
+    # its only values outside the switches.
     persistent = load_params_file(REPO_ROOT / 'config' / 'persistent.yaml')
     kept_off = ['search_while_tracking']
     assert len(on) >= 7 and [name for name in switches
                              if not getattr(persistent.additions, name)] == kept_off
     assert persistent == SatParams().with_overrides(
         {**{f'additions.{name}': name not in kept_off for name in switches},
-         'actions.n_angular': 16})
+         'actions.n_angular': 16, 'phd.birth_velocity_std': 0.5,
+         'search.density_velocity_std': 1.0, 'search.sweep_slack': 1.2,
+         'cooperation.follow_velocity_error': 0.025, 'cooperation.revisit_loss': 0.02})
     assert not any(getattr(strict.additions, name) for name in switches)
     assert strict == SatParams().with_overrides({f'additions.{name}': False for name in on})
 

@@ -15,6 +15,10 @@ from sat_agent.search_density import ConstantDecay, Lattice, SearchDensity
 
 PERSISTENT = load_params_file('config/persistent.yaml')
 AWAY = np.array([-50.0, -50.0])   # a pose whose square holds no cell: nothing is held
+# K the identity: no process noise and no velocity spread (search.density_velocity_std 0 takes
+# phd.birth_velocity_std's, which the profile sets apart from it).
+NO_MOTION = {'motion.process_noise': 0.0, 'phd.birth_velocity_std': 0.0,
+             'search.density_velocity_std': 0.0}
 
 
 def _params(**values) -> SatParams:
@@ -41,8 +45,7 @@ def test_the_switch_chooses_the_model():
 def test_birth_only_a_searched_cell_regrows_as_the_derivation_says():
     # No motion (sigma_K = 0, K the identity): u_k = b (1 - p_S^k) / (1 - p_S) after a visit
     # with p_D = 1.
-    params = _params(**{'motion.process_noise': 0.0, 'phd.birth_velocity_std': 0.0,
-                        'sensor.p_detect': 1.0})
+    params = _params(**NO_MOTION, **{'sensor.p_detect': 1.0})
     density = _density(params)
     cell = np.array([50.5, 50.5])
     density.values[:] = 0.5
@@ -61,7 +64,8 @@ def test_birth_plus_diffusion_a_point_of_mass_spreads_as_the_discrete_gaussian()
     # A cell holding mass m amid cells holding none, far from the border: after n steps its u is
     # the uniform births' b (1 - p_S^n) / (1 - p_S) (a uniform field stays uniform under K)
     # plus p_S^n m (e^{-n t} I_0(n t))^2, n steps of K being one of variance n t.
-    params = _params(**{'motion.process_noise': 0.02, 'phd.birth_velocity_std': 0.5})
+    params = _params(**{'motion.process_noise': 0.02, 'phd.birth_velocity_std': 0.5,
+                        'search.density_velocity_std': 0.0})
     density = _density(params)
     t = step_variance(params) / density.lattice.spacing ** 2
     assert t == pytest.approx(0.5 ** 2 + 0.02 / 3)     # sigma_v^2 T^2 + q T^3 / 3
@@ -87,16 +91,18 @@ def test_birth_plus_diffusion_a_point_of_mass_spreads_as_the_discrete_gaussian()
 
 def test_the_kernels_velocity_spread_may_be_set_apart_from_the_filters_births():
     # search.density_velocity_std 0 (the default) takes phd.birth_velocity_std's; set, it
-    # alone spreads K and the filter's newborn prior is left to the filter.
+    # alone spreads K and the filter's newborn prior is left to the filter. The persistent
+    # profile sets them apart (0.5 and 1, arm S4 of docs/persistent_trials.md).
     dt, q = PERSISTENT.motion.dt, PERSISTENT.motion.process_noise
-    births_only = _params(**{'phd.birth_velocity_std': 0.5})
+    shared = _params(**{'phd.birth_velocity_std': 1.0, 'search.density_velocity_std': 0.0})
+    births_only = _params(**{'phd.birth_velocity_std': 0.5, 'search.density_velocity_std': 0.0})
     assert step_variance(births_only) == pytest.approx(0.5 ** 2 * dt ** 2 + q * dt ** 3 / 3)
     apart = _params(**{'phd.birth_velocity_std': 0.5, 'search.density_velocity_std': 1.0})
     assert apart.phd.birth_velocity_std == 0.5
-    assert step_variance(apart) == pytest.approx(step_variance(PERSISTENT))
-    assert np.array_equal(_density(apart).model.kernel, _density(PERSISTENT).model.kernel)
-    assert not np.array_equal(_density(births_only).model.kernel,
-                              _density(PERSISTENT).model.kernel)
+    assert step_variance(apart) == pytest.approx(step_variance(shared))
+    assert np.array_equal(_density(apart).model.kernel, _density(shared).model.kernel)
+    assert not np.array_equal(_density(births_only).model.kernel, _density(shared).model.kernel)
+    assert np.array_equal(_density(PERSISTENT).model.kernel, _density(apart).model.kernel)
 
 
 def test_the_discrete_gaussian_has_unit_mass_and_the_asked_variance():
@@ -127,10 +133,9 @@ def test_the_papers_constant_j_is_the_special_case():
     # A 5 m lattice keeps the birth rate this takes (-ln J per cell) within its range.
     lattice = Lattice.for_area(PERSISTENT.area, 5.0)
     decay = 0.999
-    params = _params(**{'motion.process_noise': 0.0, 'phd.birth_velocity_std': 0.0,
-                        'search.lattice_spacing': 5.0,
-                        'motion.p_survival': 1.0, 'sensor.p_detect': 1.0,
-                        'phd.birth_rate': -math.log(decay) * lattice.nx * lattice.ny})
+    params = _params(**NO_MOTION, **{
+        'search.lattice_spacing': 5.0, 'motion.p_survival': 1.0, 'sensor.p_detect': 1.0,
+        'phd.birth_rate': -math.log(decay) * lattice.nx * lattice.ny})
     regrowing = SearchDensity(lattice, params)
     paper = SearchDensity(lattice, params.with_overrides({'additions.regrowing_density': False,
                                                           'search.decay': decay}))

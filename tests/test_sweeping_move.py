@@ -55,12 +55,12 @@ def test_the_move_bends_towards_fresh_ground_within_its_slack(slack):
 
 
 def test_no_slack_or_no_worth_is_the_papers_move():
-    density = _worth_to_the_north(PERSISTENT)
-    assert sweeping_action(POSE, EAST, PERSISTENT, density) == search_action(POSE, EAST,
-                                                                             PERSISTENT)
-    params = PERSISTENT.with_overrides({'search.sweep_slack': 1.2})
-    flat = _density(params)
-    assert sweeping_action(POSE, EAST, params, flat) == search_action(POSE, EAST, params)
+    still = PERSISTENT.with_overrides({'search.sweep_slack': 0.0})
+    density = _worth_to_the_north(still)
+    assert sweeping_action(POSE, EAST, still, density) == search_action(POSE, EAST, still)
+    flat = _density(PERSISTENT)
+    assert sweeping_action(POSE, EAST, PERSISTENT, flat) == search_action(POSE, EAST,
+                                                                          PERSISTENT)
 
 
 @settings(max_examples=60, deadline=None)

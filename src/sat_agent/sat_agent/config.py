@@ -296,7 +296,8 @@ class SearchParams:
     # newborn prior. Rule 24 (docs/persistent_trials.md; persistent profile, random, fresh dev
     # seeds 11451-11750) set the filter's at 0.5 and this at 1: detected +1.6 points (p 0.20),
     # OSPA -0.05 m; this alone at 0.5 (rule 25, 11851-12150): area by k = 100 +0.9 points,
-    # detected -1.4, OSPA -0.01 m: not kept.
+    # detected -1.4, OSPA -0.01 m: not kept. config/persistent.yaml sets the pair with the rest
+    # of arm S4 (rules 33-34).
     density_velocity_std: float = param(
         0.0, "additions.regrowing_density: the undetected targets' velocity spread sigma_v of "
         "its motion kernel K (m/s); 0: phd.birth_velocity_std's", low=0, high=100)
@@ -355,6 +356,7 @@ class SearchParams:
         'any', 'additions.investigation: the search move that keeps a newborn spot in view: '
         "'any' admissible move, 'full' only a move as long as the walk's (the walk may turn "
         'for a spot but never slows down or stands)', choices=SPOT_MOVES)
+    # 1.2 in config/persistent.yaml, one of arm S4's levers (rules 31 and 33-34).
     sweep_slack: float = param(
         0.0, "how much farther (m) from the walk's next node than the nearest admissible "
         'pose a search move may end, to take the square holding the most undetected targets '
@@ -422,7 +424,8 @@ class CooperationParams:
     follow_steps: int = param(
         8, 'additions.track_coasting: a tracking agent returns to search once every target '
         'in its square has a track of at least this many estimates', low=2, high=MANY)
-    # 0.025 m/s (session 31, dev seeds 6841-7140): tracked +0.29 points, n.s.
+    # 0.025 m/s (session 31, dev seeds 6841-7140): tracked +0.29 points, n.s.; in
+    # config/persistent.yaml with the rest of arm S4 (rules 33-34).
     follow_velocity_error: float = param(
         0.04, "additions.track_coasting: and the standard error of that track's fitted "
         'velocity is at most this (m/s; 0: the count alone)', low=0, high=100)
@@ -439,7 +442,8 @@ class CooperationParams:
     # Dev seeds 2601-2700 at random, paired with the persistent profile: 0.05 / 0.1 / 0.2 gave
     # detected -2.5 / -4.3 / -3.6 points, tracked +0.4 / +0.9 / +0.0; 0.05 on fresh seeds
     # 2701-3000: detected -0.1, tracked +2.2 (p < 0.001), OSPA -0.16 m (docs/persistent_trials.md).
-    # 0.02 (session 31, dev seeds 6841-7140): tracked +0.37 points, n.s.
+    # 0.02 (session 31, dev seeds 6841-7140): tracked +0.37 points, n.s.; in
+    # config/persistent.yaml with the rest of arm S4 (rules 33-34).
     revisit_loss: float = param(
         0.05, 'additions.track_revisit: a searching agent flies back over a coasted target once '
         'the chance that its fit errs by more than phd.coast_gate when the agent gets there '
