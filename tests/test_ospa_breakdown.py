@@ -3,7 +3,6 @@ import numpy as np
 import pytest
 
 from sat_agent.config import load_params_file
-
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.metrics import compute_metrics, MetricsConfig, StepRecord
 from sat_world_sim.ospa_breakdown import coasted_tracks, false_sources, ospa_without
