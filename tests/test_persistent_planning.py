@@ -1,9 +1,11 @@
 """Persistent planning (beyond_paper/persistent_planning.py): worth per distance, replans."""
 
 import numpy as np
+import pytest
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent
+from sat_agent.beyond_paper.overdue_nodes import sweep_steps
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner, worth_dropped
 from sat_agent.config import AreaParams, load_params_file
 from sat_agent.search_map import nodes_in_view, SearchMap
@@ -90,6 +92,42 @@ def test_a_walk_whose_next_node_pays_less_than_half_the_best_rate_is_replanned_a
     assert planner.walk[0] != first
 
 
+def test_a_lone_agent_takes_first_a_node_unseen_for_a_sweep_and_keeps_it_on_decay():
+    far = int(np.argmin(np.hypot(*(MAP.centers - (95.0, 5.0)).T)))
+    planners = {sweeps: _planned(PERSISTENT.with_overrides({'search.overdue_sweeps': sweeps}))
+                for sweeps in (1.0, 0.0)}
+    for planner in planners.values():            # every centre seen once, but far's
+        for k, node in enumerate(np.setdiff1d(np.arange(MAP.size), [far]), start=2):
+            planner.mark_visited(MAP.centers[node])
+            assert not planner.needs_replan(frozenset({1}), False, step=k)
+        assert planner.walk == (far,)
+    pose, step = MAP.centers[far - 1], int(np.ceil(_sweep(PERSISTENT)))   # 357
+    on, off = planners[1.0], planners[0.0]
+    assert on.needs_replan(frozenset({1}), False, step=step - 1) == ReplanReason.NONE
+    assert on.needs_replan(frozenset({1}), False, step=step) == ReplanReason.OVERDUE
+    assert off.needs_replan(frozenset({1}), False, step=step) == ReplanReason.NONE
+    # A neighbour in range: the ages are the own square's, so the rule waits (a joint plan).
+    assert on.needs_replan(frozenset({1, 2}), False, step=step) == ReplanReason.NEW_NEIGHBOUR
+    on.needs_replan(frozenset({1}), False, step=step)
+    worth = np.ones(MAP.size)
+    on.plan(1, {1: pose}, worth)
+    assert on.walk[0] == far and sorted(on.walk) == sorted(set(range(MAP.size)) - {far - 1})
+    # Worth regrew tenfold everywhere but at far (not searched by others: kept). The decay rule
+    # would leave far for a richer node; not while it is overdue.
+    decayed = 10.0 * worth
+    decayed[far] = 1.0
+    for planner in (on, off):
+        planner.mark_visited(pose, decayed)
+    assert on.needs_replan(frozenset({1}), False, step=step + 1) == ReplanReason.NONE
+    assert off.needs_replan(frozenset({1}), False, step=step + 1) == ReplanReason.DECAYED
+
+
+def test_a_sweep_needs_a_slack_below_the_top_speed():
+    assert sweep_steps(PERSISTENT, MAP.size, MAP.spacing) == _sweep(PERSISTENT)
+    with pytest.raises(ValueError, match='search.sweep_slack = 4.0 leaves a walk no progress'):
+        sweep_steps(PERSISTENT.with_overrides({'search.sweep_slack': 4.0}), MAP.size, 10.0)
+
+
 def _revisit_gaps(params, steps: int, start=(10.0, 60.0)) -> np.ndarray:
     """Return the steps between consecutive views of each node by a lone agent, no target."""
     agent = Agent(1, params, start, seed=0)
@@ -120,17 +158,21 @@ def test_a_lone_agent_with_no_target_revisits_every_node_within_two_sweeps():
     # sweeping move (search.sweep_slack) may end each step up to its slack farther from the
     # node than the nearest pose, so a walk closes at least v - slack a step (357 steps for
     # the profile's 1.2 m).
-    # A view here is a node's centre in the square. drop_searched_nodes also ends a node's wait
-    # when the square searched its cells with the centre just outside: then 2 of the 100
-    # centres wait up to 516 steps without the slack (424 with it off, the bound's case), and
-    # with it one centre, (25, 55), waits 768: passes beside it search part of its ground, and
-    # the lower worth puts it late in each replanned walk; every centre is still seen again.
-    params = PERSISTENT.with_overrides({'additions.drop_searched_nodes': False})
-    for case in (params, params.with_overrides({'search.sweep_slack': 0.0})):
+    # A view here is a node's centre in the square. drop_searched_nodes and the decay rule's
+    # replans break "the end of the next walk": passes beside a node search part of its
+    # ground, the walk drops it, and its lower worth puts it late in every replanned walk, so
+    # without search.overdue_sweeps one centre, (25, 55), waits 768 steps. With it (the
+    # profile's 1 sweep) a node unseen for a sweep goes first in a lone walk, which is at most
+    # a walk through every node: within two sweeps again (beyond_paper/overdue_nodes.py).
+    drop_off = PERSISTENT.with_overrides({'additions.drop_searched_nodes': False})
+    for case in (PERSISTENT, PERSISTENT.with_overrides({'search.sweep_slack': 0.0}), drop_off):
         sweep = _sweep(case)
         assert np.max(_revisit_gaps(case, int(3 * sweep))) <= 2 * sweep
-    sweep = _sweep(PERSISTENT)
-    assert np.max(_revisit_gaps(PERSISTENT, int(3 * sweep))) < 3 * sweep
+    starving = PERSISTENT.with_overrides({'search.overdue_sweeps': 0.0})
+    sweep = _sweep(starving)
+    gaps = _revisit_gaps(starving, int(3 * sweep))
+    assert np.max(gaps) > 2 * sweep
+    np.testing.assert_array_equal(MAP.centers[np.argmax(gaps)], [25.0, 55.0])
     # The paper's density and planner (config/paper.yaml) sweep once, then wait for J to
     # bring nodes below beta (or revisit the least searched half): some wait far longer.
     paper = load_params_file('config/paper.yaml')

@@ -200,6 +200,11 @@ class ReplanReason(enum.IntEnum):
     EXHAUSTED = 5      # every node of the own walk is visited
     PERIODIC = 6       # additions.persistent_planning: a joint replan at every replan_period
     DECAYED = 7        # additions.persistent_planning: the walk collects too little worth
+    OVERDUE = 8        # search.overdue_sweeps: a lone agent's node went unseen too long
+
+
+# Replans made alone, on the agent's own values (the others are joint when others are in range).
+ALONE_REASONS = (ReplanReason.EXHAUSTED, ReplanReason.DECAYED, ReplanReason.OVERDUE)
 
 
 class SearchPlanner:
@@ -337,7 +342,7 @@ class SearchPlanner:
         if values.size != self._map.size:
             raise ValueError(f'{values.size} search values for {self._map.size} nodes')
         own_start = _point(starts[own_id])
-        if self._reason in (ReplanReason.EXHAUSTED, ReplanReason.DECAYED):
+        if self._reason in ALONE_REASONS:
             self._plan_alone(own_id, own_start, values)
         else:
             walks = planned_walks(starts, self._map.centers, self._nodes_to_search(values),
@@ -353,10 +358,15 @@ class SearchPlanner:
     def _plan_alone(self, own_id: int, start: np.ndarray, node_values: np.ndarray):
         in_view = nodes_in_view(self._map, start, self._params.sensor.square_side)
         nodes = self._claims.unclaimed(self._nodes_out_of_view(node_values, in_view))
+        self._walk = self._walk_alone(own_id, start, nodes, node_values)
+        self._group = self._group | {int(own_id)}
+
+    def _walk_alone(self, own_id: int, start: np.ndarray, nodes: np.ndarray,
+                    node_values: np.ndarray) -> np.ndarray:
+        """Return the walk from start over nodes of a replan made alone."""
         walks = planned_walks({own_id: start}, self._map.centers, nodes,
                               self._params.search.planner, self._walk_worth(node_values))
-        self._walk = np.asarray(walks[own_id], dtype=np.int64)
-        self._group = self._group | {int(own_id)}
+        return np.asarray(walks[own_id], dtype=np.int64)
 
     def _nodes_out_of_view(self, node_values: np.ndarray, in_view: np.ndarray) -> np.ndarray:
         """Return the nodes to search, those in view counting as visited (class docstring)."""

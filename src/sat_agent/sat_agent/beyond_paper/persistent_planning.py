@@ -27,7 +27,10 @@ Addition (``PersistentPlanner``):
   elsewhere and others search its nodes;
 - a node of the walk that another agent searched meanwhile (with additions.
   drop_searched_nodes) is one whose fused worth fell below DROPPED_SHARE of its worth when
-  the walk was planned.
+  the walk was planned;
+- with search.overdue_sweeps, a lone agent takes first the nodes its square has not held for
+  that many sweeps (beyond_paper/overdue_nodes.py): the decay replans and the drop above
+  would otherwise leave a node late in every walk.
 
 Why: targets are born all through the mission; a swarm that sweeps once never looks again
 where later targets appear, and one that plans on an absolute threshold either holds or
@@ -37,10 +40,12 @@ Switch: ``additions.persistent_planning`` (off: search_planning.SearchPlanner).
 
 import numpy as np
 
+from sat_agent.beyond_paper.overdue_nodes import overdue_nodes, sweep_steps
 from sat_agent.config import SatParams
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import nodes_in_view, SearchMap
-from sat_agent.search_planning import _costs, MIN_COST, own_visits_only, SearchPlanner
+from sat_agent.search_planning import (_costs, MIN_COST, own_visits_only, planned_walks,
+                                       ReplanReason, SearchPlanner)
 
 # A scan removes p_D = 99 % of the undetected mass it covers; a node whose worth fell below
 # half of its planned worth was mostly covered by someone's square since (its worth only
@@ -77,6 +82,12 @@ class PersistentPlanner(SearchPlanner):
         self._nodes_to_search = every_node
         self._searched_meanwhile = (worth_dropped if params.additions.drop_searched_nodes
                                     else own_visits_only)
+        sweeps = params.search.overdue_sweeps
+        self._overdue_after = (sweeps * sweep_steps(params, search_map.size, search_map.spacing)
+                               if sweeps > 0.0 else np.inf)
+        self._last_seen = np.zeros(search_map.size)
+        self._overdue = np.zeros(0, dtype=np.int64)
+        self._overdue_head = np.zeros(0, dtype=np.int64)
 
     def node_values(self, density: SearchDensity) -> np.ndarray:
         """Each node's worth: the expected undetected targets in its region."""
@@ -87,13 +98,49 @@ class PersistentPlanner(SearchPlanner):
         self._latest = (np.asarray(pose, dtype=float), node_values)
         return super().mark_visited(pose, node_values)
 
+    def needs_replan(self, group: frozenset, released: bool, resumed: bool = False,
+                     step: int = 0) -> ReplanReason:
+        """SearchPlanner.needs_replan, and OVERDUE (beyond_paper/overdue_nodes.py)."""
+        pose = self._latest[0]
+        if pose is not None:
+            self._last_seen[nodes_in_view(self._map, pose, self._params.sensor.square_side)] = step
+        self._overdue = (overdue_nodes(self._last_seen, step, self._overdue_after)
+                         if len(group) <= 1
+                         else np.zeros(0, dtype=np.int64))
+        reason = super().needs_replan(group, released, resumed, step)
+        # Overdue nodes a lone plan would take (claims as in _plan_alone) missing from the head.
+        takeable = np.intersect1d(self._claims.free(every_node(self._last_seen)), self._overdue)
+        pending = np.setdiff1d(takeable, np.intersect1d(self._overdue_head, self._walk))
+        if not reason and pending.size:
+            reason = self._reason = ReplanReason.OVERDUE
+        return reason
+
+    def _walk_alone(self, own_id: int, start: np.ndarray, nodes: np.ndarray,
+                    node_values: np.ndarray) -> np.ndarray:
+        """Return the overdue nodes' walk from start, then the others' from its last node."""
+        first = np.intersect1d(nodes, self._overdue)
+        self._overdue_head = np.zeros(0, dtype=np.int64)
+        if not first.size:
+            return super()._walk_alone(own_id, start, nodes, node_values)
+        rest = np.setdiff1d(nodes, first)
+        worth, centers, planner = (self._walk_worth(node_values), self._map.centers,
+                                   self._params.search.planner)
+        head = np.asarray(planned_walks({own_id: start}, centers, first, planner, worth)[own_id],
+                          dtype=np.int64)
+        tail = planned_walks({own_id: centers[head[-1]]}, centers, rest, planner, worth)[own_id]
+        self._overdue_head = head
+        return np.concatenate([head, np.asarray(tail, dtype=np.int64)])
+
     def _periodic(self, step: int, group: frozenset) -> bool:
         return step % self._period == 0 and len(group) > 1
 
     def _decayed(self) -> bool:
-        """Whether the next node pays less than DECAYED_SHARE of the best rate (docstring)."""
+        """Whether the next node pays less than DECAYED_SHARE of the best rate (docstring).
+
+        Never while the next node is overdue (beyond_paper/overdue_nodes.py).
+        """
         pose, worth = self._latest
-        if worth is None or not self._walk.size:
+        if worth is None or not self._walk.size or self._walk[0] in self._overdue:
             return False
         worth = np.asarray(worth, dtype=float).reshape(-1)
         in_view = nodes_in_view(self._map, pose, self._params.sensor.square_side)
