@@ -30,8 +30,9 @@ def test_the_strict_profile_is_the_default_with_every_addition_off():
     # The default is config/paper.yaml: every addition on but persistent search-and-track's,
     # which config/persistent.yaml switches on (issue 15), search while tracking aside (built,
     # measured and left off: the file says why); that profile also steers with 16 headings
-    # (rule 30) and sets the five levers of arm S4 (rules 33-34, docs/persistent_trials.md),
-    # its only values outside the switches.
+    # (rule 30), sets the five levers of arm S4 (rules 33-34, docs/persistent_trials.md) and
+    # takes a lone agent's overdue nodes first (session 54), its only values outside the
+    # switches.
     persistent = load_params_file(REPO_ROOT / 'config' / 'persistent.yaml')
     kept_off = ['search_while_tracking']
     assert len(on) >= 7 and [name for name in switches
@@ -40,7 +41,8 @@ def test_the_strict_profile_is_the_default_with_every_addition_off():
         {**{f'additions.{name}': name not in kept_off for name in switches},
          'actions.n_angular': 16, 'phd.birth_velocity_std': 0.5,
          'search.density_velocity_std': 1.0, 'search.sweep_slack': 1.2,
-         'cooperation.follow_velocity_error': 0.025, 'cooperation.revisit_loss': 0.02})
+         'cooperation.follow_velocity_error': 0.025, 'cooperation.revisit_loss': 0.02,
+         'search.overdue_sweeps': 1.0})
     assert not any(getattr(strict.additions, name) for name in switches)
     assert strict == SatParams().with_overrides({f'additions.{name}': False for name in on})
 
