@@ -3,8 +3,8 @@
 Paper: none. Its density never regrows, so a searched node waits for J to bring it back below
 beta (search_planning.SearchPlanner); persistent planning (persistent_planning.py) orders a
 walk by worth per metre and replans it alone when its next node has decayed.
-Why: with additions.drop_searched_nodes a node whose region passes beside it have half searched
-leaves the walk, and its lower worth puts it late in every walk the decay rule replans: a lone
+Why: with additions.drop_searched_nodes a node whose region was half searched by passes beside
+it leaves the walk, and its lower worth puts it late in every walk the decay rule replans: a lone
 agent with no target left one node centre, (25, 55), unseen for 768 steps, past the two sweeps
 (714 steps) within which the derivation has every node seen again
 (tests/test_persistent_planning.py).
@@ -14,8 +14,8 @@ age reaches overdue_sweeps sweeps, a sweep being the steps of a walk through eve
 search move's least progress per step, |V| s / (v - sweep_slack) (``sweep_steps``). While no
 other searching agent is in range: when a node out of the walk's overdue head becomes overdue
 the agent replans alone (ReplanReason.OVERDUE), the walk takes the overdue nodes first (worth
-per metre among them, then the others on from the last of them), and a walk
-whose next node is overdue is not replanned on decay. So an overdue node is seen again within
+per metre among them, then the others on from the last of them), and a walk whose next node
+is overdue is not replanned on decay. So an overdue node is seen again within
 the walk through the overdue nodes, which is at most the walk through all of them: within
 overdue_sweeps + 1 sweeps of its last visit.
 Ages ignore the neighbours' squares and the steps out of SEARCH, so the rule waits for a lone

@@ -108,12 +108,17 @@ class PersistentPlanner(SearchPlanner):
                          if len(group) <= 1
                          else np.zeros(0, dtype=np.int64))
         reason = super().needs_replan(group, released, resumed, step)
-        # Overdue nodes a lone plan would take (claims as in _plan_alone) missing from the head.
-        takeable = np.intersect1d(self._claims.free(every_node(self._last_seen)), self._overdue)
-        pending = np.setdiff1d(takeable, np.intersect1d(self._overdue_head, self._walk))
-        if not reason and pending.size:
+        if not reason and self._overdue.size and self._pending_overdue().size:
             reason = self._reason = ReplanReason.OVERDUE
         return reason
+
+    def _pending_overdue(self) -> np.ndarray:
+        """Return the overdue nodes a lone plan would take but the walk's overdue head lacks.
+
+        A lone plan takes the unclaimed nodes, as _plan_alone does.
+        """
+        takeable = np.intersect1d(self._claims.free(every_node(self._last_seen)), self._overdue)
+        return np.setdiff1d(takeable, np.intersect1d(self._overdue_head, self._walk))
 
     def _walk_alone(self, own_id: int, start: np.ndarray, nodes: np.ndarray,
                     node_values: np.ndarray) -> np.ndarray:
