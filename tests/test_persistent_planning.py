@@ -123,7 +123,10 @@ def test_a_lone_agent_takes_first_a_node_unseen_for_a_sweep_and_keeps_it_on_deca
 
 
 def test_a_sweep_needs_a_slack_below_the_top_speed():
-    assert sweep_steps(PERSISTENT, MAP.size, MAP.spacing) == _sweep(PERSISTENT)
+    # 100 nodes 10 m apart at 4 m a step, less the profile's 1.2 m of slack, or none.
+    assert sweep_steps(PERSISTENT, MAP.size, MAP.spacing) == pytest.approx(1000.0 / 2.8)
+    no_slack = PERSISTENT.with_overrides({'search.sweep_slack': 0.0})
+    assert sweep_steps(no_slack, MAP.size, MAP.spacing) == pytest.approx(250.0)
     with pytest.raises(ValueError, match='search.sweep_slack = 4.0 leaves a walk no progress'):
         sweep_steps(PERSISTENT.with_overrides({'search.sweep_slack': 4.0}), MAP.size, 10.0)
 
@@ -145,8 +148,7 @@ def _revisit_gaps(params, steps: int, start=(10.0, 60.0)) -> np.ndarray:
 
 def _sweep(params) -> float:
     """Return |V| s / (v - slack): the steps of a walk through every node (the test below)."""
-    speed = params.actions.n_radial * params.actions.radial_step - params.search.sweep_slack
-    return MAP.size * MAP.spacing / speed
+    return sweep_steps(params, MAP.size, MAP.spacing)
 
 
 def test_a_lone_agent_with_no_target_revisits_every_node_within_two_sweeps():
