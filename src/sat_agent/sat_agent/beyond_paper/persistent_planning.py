@@ -44,8 +44,8 @@ from sat_agent.beyond_paper.overdue_nodes import overdue_nodes, sweep_steps
 from sat_agent.config import SatParams
 from sat_agent.search_density import SearchDensity
 from sat_agent.search_map import nodes_in_view, SearchMap
-from sat_agent.search_planning import (_costs, MIN_COST, own_visits_only, planned_walks,
-                                       ReplanReason, SearchPlanner)
+from sat_agent.search_planning import (_costs, MIN_COST, own_visits_only, ReplanReason,
+                                       SearchPlanner)
 
 # A scan removes p_D = 99 % of the undetected mass it covers; a node whose worth fell below
 # half of its planned worth was mostly covered by someone's square since (its worth only
@@ -127,14 +127,11 @@ class PersistentPlanner(SearchPlanner):
         self._overdue_head = np.zeros(0, dtype=np.int64)
         if not first.size:
             return super()._walk_alone(own_id, start, nodes, node_values)
-        rest = np.setdiff1d(nodes, first)
-        worth, centers, planner = (self._walk_worth(node_values), self._map.centers,
-                                   self._params.search.planner)
-        head = np.asarray(planned_walks({own_id: start}, centers, first, planner, worth)[own_id],
-                          dtype=np.int64)
-        tail = planned_walks({own_id: centers[head[-1]]}, centers, rest, planner, worth)[own_id]
+        head = super()._walk_alone(own_id, start, first, node_values)
+        tail = super()._walk_alone(own_id, self._map.centers[head[-1]],
+                                   np.setdiff1d(nodes, first), node_values)
         self._overdue_head = head
-        return np.concatenate([head, np.asarray(tail, dtype=np.int64)])
+        return np.concatenate([head, tail])
 
     def _periodic(self, step: int, group: frozenset) -> bool:
         return step % self._period == 0 and len(group) > 1
