@@ -182,6 +182,9 @@ class PhdParams:
     birth_prior_blur: float = param(
         0.0, "phd.birth_prior 'undetected': the undetected density is read at a measurement "
         'through a Gaussian blur of this spread (m; 0: its own cell)', low=0, high=100)
+    # Persistent profile, paired (rules 39-40, docs/persistent_trials.md): 400 (fresh dev seeds
+    # 22295-22894) OSPA +0.12 m (p 0.022), with particles_per_target 4000 tracked -2.0 points
+    # (p 0.030); 50 (22895-23494) detected -2.4 (p 0.007). Not kept.
     birth_particles_per_measurement: int = param(100, 'particles per measurement-driven birth',
                                                  low=0, high=1e5)
     birth_velocity_std: float = param(1.0, "prior spread of a newborn's velocity (m/s)",
