@@ -112,13 +112,13 @@ def test_false_tracks_are_estimates_assigned_to_no_target():
     assert two['steps'][0]['n_false'] == 1 and two['steps'][0]['n_tracked'] == 1
 
 
-def test_entered_share_counts_targets_that_were_ever_in_a_square():
-    assert compute_metrics(small_run(), 'tiny', 9)['summary']['entered_share'] == 1.0
+def test_detectable_share_counts_targets_that_were_ever_in_a_square():
+    assert compute_metrics(small_run(), 'tiny', 9)['summary']['detectable_share'] == 1.0
     # Target 0 passes the agent's square at step 2, never detected; target 1 stays far.
     records = [record(k, [[10.0 + 20 * (k - 2) ** 2, 10.0], [90.0, 90.0]], {1: (10.0, 10.0)},
                       {1: []}, {1: 'SEARCH'}, ids=[0, 1]) for k in (1, 2, 3)]
     summary = compute_metrics(records, 's', 1)['summary']
-    assert summary['entered_share'] == 0.5 and summary['detected_share'] == 0.0
+    assert summary['detectable_share'] == 0.5 and summary['detected_share'] == 0.0
 
 
 def test_two_agents_near_one_target_are_a_duplicate():

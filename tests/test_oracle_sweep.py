@@ -136,7 +136,7 @@ def test_the_tour_oracle_finds_what_enters_and_a_follower_rejoins_its_slot():
     scenario = random_scenario(5, 4, 200)
     run = run_oracle_sweep(scenario, PARAMS, tour=True)
     summary = compute_metrics(run.records, scenario.name, 5)['summary']
-    assert summary['detected_share'] == summary['entered_share'] > 0.0
+    assert summary['detected_share'] == summary['detectable_share'] > 0.0
     lap = tour_lap(PARAMS)
     # By the last step every agent rides its slot, a quarter lap apart.
     last = len(run.records) - 1
@@ -157,7 +157,7 @@ def test_the_oracle_detects_exactly_the_targets_that_enter_a_square_on_the_same_
     scenario = random_scenario(5, 4, 200)
     run = run_oracle_sweep(scenario, PARAMS)
     summary = compute_metrics(run.records, scenario.name, 5)['summary']
-    assert summary['detected_share'] == summary['entered_share'] > 0.0
+    assert summary['detected_share'] == summary['detectable_share'] > 0.0
     assert summary['false_track_steps'] == 0 and summary['duplicate_tracking_steps'] == 0
     assert {m for r in run.records for m in r.modes.values()} == {'SEARCH'}
     # The oracle's truth is the World's for the seed, whoever flies.
@@ -219,7 +219,7 @@ def test_sweep_and_track_gives_each_target_one_follower_and_finds_what_enters():
     scenario = random_scenario(7, 4, 200)
     run = run_oracle_sweep(scenario, PARAMS, follow=True)
     summary = compute_metrics(run.records, scenario.name, 7)['summary']
-    assert summary['detected_share'] == summary['entered_share'] > 0.0
+    assert summary['detected_share'] == summary['detectable_share'] > 0.0
     assert summary['false_track_steps'] == 0
     sweep = compute_metrics(run_oracle_sweep(scenario, PARAMS).records, scenario.name, 7)
     assert summary['tracked_share'] > sweep['summary']['tracked_share']

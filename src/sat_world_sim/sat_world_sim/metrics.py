@@ -28,9 +28,10 @@ Definitions (the paper leaves them open):
   two or more agents at once: a duplicate (``n_duplicate``).
 - False track at step k: an agent's estimate assigned to no true target (``n_false``, summed
   over agents); ``false_track_steps`` counts the steps with at least one.
-- ``entered_share``: the share of the run's targets whose true position was inside some
-  agent's sensing square at some step (``first_in_view`` not None): what the search offered
-  the detector, whatever the detector made of it.
+- ``detectable_share``: the share of the run's targets whose true position was inside some
+  agent's sensing square at some step (``first_in_view`` not None): the targets the search
+  made detectable, whatever the detector made of them ("entered" in the tables and the trials'
+  record; the column was ``entered_share`` until 2026-12-06).
 - ``born`` / ``died``: first and last step the target is alive in the records (``died`` is None
   when it is still alive at the last recorded step).
 """
@@ -241,8 +242,8 @@ def _summary(steps: List[dict], targets: List[dict], radio: dict) -> dict:
         'targets_to_detect': len(targets),
         'detected_share': _share(sum(t['first_detected'] is not None for t in targets),
                                  len(targets)),
-        'entered_share': _share(sum(t['first_in_view'] is not None for t in targets),
-                                len(targets)),
+        'detectable_share': _share(sum(t['first_in_view'] is not None for t in targets),
+                                   len(targets)),
         'mean_time_to_detection': _mean([t['time_to_detection'] for t in targets]),
         'tracked_share': _share(sum(s['n_tracked'] for s in steps), target_steps),
         'duplicate_tracking_steps': sum(1 for s in steps if s['n_duplicate']),

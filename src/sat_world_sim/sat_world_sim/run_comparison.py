@@ -19,7 +19,7 @@ from sat_world_sim.evaluate import read_rows
 from sat_world_sim.paired_statistics import paired_difference, PairedDifference
 from sat_world_sim.paired_statistics import paired_values
 
-METRICS = ('detected_share', 'entered_share', 'tracked_share', 'mean_ospa',
+METRICS = ('detected_share', 'detectable_share', 'tracked_share', 'mean_ospa',
            'false_track_steps', 'searched_pct_100')
 
 
