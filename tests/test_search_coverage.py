@@ -65,6 +65,19 @@ def test_area_seen_counts_each_cell_from_the_first_square_that_holds_it():
     assert seen.border_distance.min() == pytest.approx(0.5)
 
 
+def test_a_cells_longest_wait_runs_from_the_start_between_squares_and_to_the_end():
+    # The squares of the test above, the run ending at step 8: the columns x < 5 are held at
+    # step 3 only (waits 3, then 9 - 3), x 5-10 at 3 and 5 (3, 2, 4), x 10-15 at 5 (5, 4), and
+    # the columns x > 15 never (the whole run plus one).
+    seen = area_seen([(1, {}), (3, {1: np.array([5.0, 5.0])}), (5, {2: np.array([10.0, 5.0])}),
+                      (8, {})], SIDE, 20.0, 10.0)
+    columns = np.repeat([6, 4, 5, 9], 5)
+    np.testing.assert_array_equal(seen.longest_wait.reshape(10, 20), np.tile(columns, (10, 1)))
+    # Within 2 m of the border (104 cells) 64 waited more than 5 steps: the columns x < 2 and
+    # x > 18 whole, the border rows of x 2-5 and 15-18; farther in (96) the 2 x 18 others.
+    assert seen.waits(2.0, 5) == (9.0, 9.0, pytest.approx(64 / 104), pytest.approx(36 / 96))
+
+
 def test_fresh_area_counts_what_no_square_held_in_the_window_before():
     # A 100 m x 10 m area: a square at x = 5 (100 cells, never seen), one 4 m on (40 new
     # cells), the same pose again (nothing new), then, after six steps without agents, there
@@ -112,7 +125,18 @@ def test_the_script_scores_a_tour_and_refuses_what_it_cannot_run(capsys):
     # that no square held for 60 steps (the lap's period over four agents is 64).
     fresh = float(out.split('W = 60 ')[1].split(' ')[0])
     assert 30.0 < fresh <= 40.0
+    # Over a run three times its first sweep (--steps) no cell waits longer than that sweep
+    # (about 80 steps), let alone a lone sweep of the profile's walks.
+    assert SCRIPT['main'](['--pattern', 'tour', '--seeds', '1', '--synthetic', '300',
+                           '--jobs', '1', '--steps', '250']) == 0
+    waits = capsys.readouterr().out.split('longest wait of a cell')[1]
+    near, farther = (float(waits.split(part)[1].split(' ')[0].rstrip(',;'))
+                     for part in ('of the border ', 'farther in '))
+    assert 60.0 < near <= 100.0 and 60.0 < farther <= 100.0
+    assert '(357 steps), % of each: 0.0 and 0.0' in waits
     with pytest.raises(SystemExit):
         SCRIPT['main'](['--pattern', 'strips', '--with-targets'])
     with pytest.raises(SystemExit):
         SCRIPT['main'](['--set', 'search.no_such_parameter=1'])
+    with pytest.raises(SystemExit):
+        SCRIPT['main'](['--steps', '0'])

@@ -20,7 +20,9 @@ each cell of a 1 m lattice, so the share of the area searched at least once by s
 the cells no square has held lie (session 46: the walks leave the border strip unseen); and,
 per agent-step, the area a step's squares bring in that no square held in the W steps before
 (session 47: the tour brings in area unseen for 60 steps at 37 m^2 an agent-step, the walks at
-22, the ideal 40 = v a).
+22, the ideal 40 = v a); and each cell's longest wait, the most steps it went without a square
+from the run's start, between two squares or to the run's end (session 61: over long runs the
+walks leave the border strip waiting far longer than the area farther in).
 """
 
 from dataclasses import dataclass
@@ -118,10 +120,14 @@ class AreaSeen:
 
     fresh: per window W of ``windows``, the area (m^2) the squares brought in per agent-step
     that no square held in the W steps before (never held counts), over the steps with agents.
+    longest_wait: per cell, the most steps without a square: from step 0 to the first square
+    that held it, between two, or from the last to one past the run's last step (a cell never
+    held waits the whole run plus one).
     """
 
     first: np.ndarray            # (cells,) int
     border_distance: np.ndarray  # (cells,) m from the cell's centre to the area's nearest edge
+    longest_wait: np.ndarray     # (cells,) int
     windows: Tuple[int, ...] = ()
     fresh: Tuple[float, ...] = ()
 
@@ -143,6 +149,16 @@ class AreaSeen:
         close = self.border_distance <= near
         return float(unseen[close].mean()), float(unseen[~close].mean())
 
+    def waits(self, near: float, over: float) -> Tuple[float, float, float, float]:
+        """Return the longest waits near the border and farther in, then the shares waiting over.
+
+        near: m from the border, as ``unseen_by``; over: steps.
+        """
+        close = self.border_distance <= near
+        waited = self.longest_wait > over
+        return (float(self.longest_wait[close].max()), float(self.longest_wait[~close].max()),
+                float(waited[close].mean()), float(waited[~close].mean()))
+
 
 def area_seen(squares: Iterable[Tuple[int, Mapping[int, object]]], side: float, width: float,
               height: float, cell: float = 1.0, windows: Tuple[int, ...] = ()) -> AreaSeen:
@@ -155,9 +171,12 @@ def area_seen(squares: Iterable[Tuple[int, Mapping[int, object]]], side: float, 
     centres = Lattice.for_area(AreaParams(width=width, height=height), cell).centers()
     first = np.full(len(centres), -1, dtype=int)
     last = np.full(len(centres), np.iinfo(np.int64).min // 2, dtype=np.int64)
+    since = np.zeros(len(centres), dtype=np.int64)     # the step that began each cell's wait
+    longest = np.zeros(len(centres), dtype=np.int64)
     brought = np.zeros(len(windows))
-    agent_steps = 0
+    agent_steps = end = 0
     for step, poses in squares:
+        end = step
         if not len(poses):
             continue
         inside = sensor_model.in_sensing_square(centres[:, None, :], _pose_array(poses)[None],
@@ -165,8 +184,12 @@ def area_seen(squares: Iterable[Tuple[int, Mapping[int, object]]], side: float, 
         first[inside & (first < 0)] = step
         brought += [np.count_nonzero(inside & (last < step - int(w))) for w in windows]
         last[inside] = step
+        longest[inside] = np.maximum(longest[inside], step - since[inside])
+        since[inside] = step
         agent_steps += len(poses)
+    longest = np.maximum(longest, end + 1 - since)
     border = np.minimum.reduce([centres[:, 0], width - centres[:, 0], centres[:, 1],
                                 height - centres[:, 1]])
     fresh = brought * cell ** 2 / max(agent_steps, 1)
-    return AreaSeen(first, border, tuple(int(w) for w in windows), tuple(fresh.tolist()))
+    return AreaSeen(first, border, longest, tuple(int(w) for w in windows),
+                    tuple(fresh.tolist()))
