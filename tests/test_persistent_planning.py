@@ -7,16 +7,19 @@ import pytest
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent
-from sat_agent.beyond_paper.overdue_nodes import sweep_steps
+from sat_agent.beyond_paper.overdue_nodes import CellViews, cover_point, sweep_steps
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner, worth_dropped
 from sat_agent.config import AreaParams, load_params_file
+from sat_agent.search_density import Lattice
 from sat_agent.search_map import nodes_in_view, SearchMap
 from sat_agent.search_planning import greedy_closed_walk, joint_plan, ReplanReason, SearchPlanner
+from sat_agent.sensor_model import in_sensing_square
 from sat_world_sim.inprocess_swarm import InProcessSwarm
 from sat_world_sim.random_scenarios import random_scenario
 
 PERSISTENT = load_params_file('config/persistent.yaml')
 MAP = SearchMap.for_area(AreaParams(), 10.0)
+CELLS = Lattice.for_area(AreaParams(), 1.0).centers()
 
 
 def test_walks_take_the_most_worth_per_metre_and_the_nearest_among_equals():
@@ -126,6 +129,84 @@ def test_a_lone_agent_takes_first_a_node_unseen_for_a_sweep_and_keeps_it_on_deca
     assert off.needs_replan(frozenset({1}), False, step=step + 1) == ReplanReason.DECAYED
 
 
+def test_cover_point_is_the_nearest_point_whose_square_holds_every_cell():
+    cells = np.array([[1.0, 1.0], [4.0, 9.0]])
+    # x must lie in [4 - 5, 1 + 5], y in [9 - 5, 1 + 5]: from (20, 0), the corner (6, 4).
+    point = cover_point((20.0, 0.0), cells, 10.0)
+    np.testing.assert_array_equal(point, [6.0, 4.0])
+    assert in_sensing_square(cells, point, 10.0).all()
+    assert not in_sensing_square(cells, point + (0.1, 0.0), 10.0).all()
+    np.testing.assert_array_equal(cover_point((3.0, 5.0), cells, 10.0), [3.0, 5.0])
+    # Cells wider apart than the side: the middle of the span.
+    np.testing.assert_array_equal(cover_point((0.0, 0.0), [[0.0, 0.0], [12.0, 0.0]], 10.0),
+                                  [6.0, 0.0])
+
+
+def test_cell_views_age_each_node_by_its_oldest_cell():
+    views = CellViews(Lattice.for_area(AreaParams(), 1.0), MAP, 10.0)
+    views.record((5.0, 5.0), 3)          # node 0's whole region (x, y 0-10)
+    views.record((7.0, 5.0), 4)          # its columns x 2.5-9.5, and node 1's x 10.5, 11.5
+    oldest = views.oldest()
+    assert oldest[0] == 3 and oldest[1] == 0 and not oldest[2:].any()
+    # At step 10, cells unseen for 7 steps: node 0's columns x 0.5 and 1.5 (20 cells).
+    counts = views.unseen_counts(10, 7, (-50.0, -50.0))
+    assert counts[0] == 20 and counts[1] == 80 and counts.sum() == MAP.size * 100 - 100
+    cells = views.unseen_cells(0, 10, 7, (-50.0, -50.0))
+    assert sorted(set(cells[:, 0])) == [0.5, 1.5] and len(cells) == 20
+    # A square that holds them now leaves none.
+    assert views.unseen_cells(0, 10, 7, (-3.0, 5.0)).size == 0
+
+
+def _far_overdue():
+    """Return a lone planner at step 357 whose walk takes first far, the one node never seen."""
+    far = int(np.argmin(np.hypot(*(MAP.centers - (95.0, 5.0)).T)))
+    planner = _planned()
+    for k, node in enumerate(np.setdiff1d(np.arange(MAP.size), [far]), start=2):
+        planner.mark_visited(MAP.centers[node])      # the square holds the node's whole region
+        planner.needs_replan(frozenset({1}), False, step=k)
+    step = int(np.ceil(_sweep(PERSISTENT)))
+    assert planner.needs_replan(frozenset({1}), False, step=step) == ReplanReason.OVERDUE
+    planner.plan(1, {1: MAP.centers[far - 1]}, np.ones(MAP.size))
+    assert planner.walk[0] == far
+    return planner, far, step
+
+
+def test_an_overdue_node_is_visited_once_its_cells_are_seen_not_its_centre():
+    planner, far, step = _far_overdue()           # far's region: x 90-100, y 0-10
+    # At (91, 5) the square holds far's centre (95, 5), the paper's visit, but not the cells
+    # east of x = 96: far stays, and the goal is the admissible pose holding most of them,
+    # taken exactly (no sweeping bend).
+    pose = np.array([91.0, 5.0])
+    assert planner.mark_visited(pose).size == 0 and planner.walk[0] == far
+    goal = planner.next_goal()
+    assert planner.covering
+    poses = candidate_poses(pose, PERSISTENT.actions)
+    cells = Lattice.for_area(AreaParams(), 1.0).centers()
+    cells = cells[(cells[:, 0] > 96.0) & (cells[:, 1] < 10.0)]
+    held = in_sensing_square(cells[None], poses[:, None], 10.0).sum(axis=1)
+    assert held.max() == cells.shape[0]
+    assert held[np.flatnonzero(np.all(poses == goal, axis=1))[0]] == held.max()
+    planner.needs_replan(frozenset({1}), False, step=step + 1)
+    assert far in planner.mark_visited(goal)
+    # The paper's visit, without the rule.
+    off = _planned(PERSISTENT.with_overrides({'search.overdue_sweeps': 0.0}))
+    assert far in off.mark_visited(pose)
+    assert not off.covering
+
+
+def test_a_replan_keeps_the_overdue_head_ahead_of_newly_overdue_nodes():
+    planner, far, step = _far_overdue()
+    # Node 0's region was seen at step 2 only: overdue at 2 + 357. The agent is beside it,
+    # and a cheapest arc over the two would take it first; the head keeps far first.
+    pose = (15.0, 5.0)
+    planner.mark_visited(pose)
+    assert planner.needs_replan(frozenset({1}), False, step=step + 1) == ReplanReason.NONE
+    assert planner.needs_replan(frozenset({1}), False, step=step + 2) == ReplanReason.OVERDUE
+    planner.plan(1, {1: pose}, np.ones(MAP.size))
+    assert planner.walk[:2] == (far, 0)
+    assert greedy_closed_walk(pose, MAP.centers, [0, far])[0] == 0
+
+
 def test_a_sweep_needs_a_slack_below_the_top_speed():
     # 100 nodes 10 m apart at 4 m a step, less the profile's 1.2 m of slack, or none.
     assert sweep_steps(PERSISTENT, MAP.size, MAP.spacing) == pytest.approx(1000.0 / 2.8)
@@ -136,21 +217,20 @@ def test_a_sweep_needs_a_slack_below_the_top_speed():
 
 
 def _revisit_gaps(params, steps: int, start=(10.0, 60.0)) -> np.ndarray:
-    """Return the steps between consecutive views of each node by a lone agent, no target."""
+    """Return each 1 m cell's longest wait between squares of a lone agent, no target."""
     agent = Agent(1, params, start, seed=0)
     pose = np.array(start)
-    last = np.zeros(MAP.size)
-    gaps = np.zeros(MAP.size)
+    last = np.zeros(len(CELLS))
+    gaps = np.zeros(len(CELLS))
     for k in range(1, steps + 1):
         out = agent.step(k, pose, np.zeros((0, 2)), [])
-        _view(gaps, last, k, pose, params)
+        _view(gaps, last, k, in_sensing_square(CELLS, pose, params.sensor.square_side))
         pose = candidate_poses(pose, params.actions)[out.action]
     return np.maximum(gaps, steps + 1 - last)
 
 
-def _view(gaps: np.ndarray, last: np.ndarray, k: int, pose, params) -> None:
-    """Record at step k the nodes whose centre the square at pose holds (gaps, last in place)."""
-    seen = nodes_in_view(MAP, pose, params.sensor.square_side)
+def _view(gaps: np.ndarray, last: np.ndarray, k: int, seen) -> None:
+    """Record at step k the views of the points seen (gaps, last in place)."""
     gaps[seen] = np.maximum(gaps[seen], k - last[seen])
     last[seen] = k
 
@@ -160,7 +240,7 @@ def _sweep(params) -> float:
     return sweep_steps(params, MAP.size, MAP.spacing)
 
 
-def test_a_lone_agent_with_no_target_revisits_every_node_within_two_sweeps():
+def test_a_lone_agent_with_no_target_sees_every_cell_again_within_two_sweeps():
     # The derivation: one step after a visit a node's worth is >= its cells' births b > 0
     # (beyond_paper/regrowing_density.py), so every plan holds every node out of view. A lone
     # agent replans when its walk is exhausted, so a node is seen again at the latest by the
@@ -169,21 +249,24 @@ def test_a_lone_agent_with_no_target_revisits_every_node_within_two_sweeps():
     # sweeping move (search.sweep_slack) may end each step up to its slack farther from the
     # node than the nearest pose, so a walk closes at least v - slack a step (357 steps for
     # the profile's 1.2 m).
-    # A view here is a node's centre in the square. drop_searched_nodes and the decay rule's
-    # replans break "the end of the next walk": passes beside a node search part of its
-    # ground, the walk drops it, and its lower worth puts it late in every replanned walk, so
-    # without search.overdue_sweeps one centre, (25, 55), waits 768 steps. With it (the
-    # profile's 1 sweep) a node unseen for a sweep goes first in a lone walk, which is at most
-    # a walk through every node: within two sweeps again (beyond_paper/overdue_nodes.py).
+    # The paper's visit (a node's centre in the square) and drop_searched_nodes' drops leave
+    # a node's ground partly unseen, and the decay rule's replans put such a node late in
+    # every walk: without search.overdue_sweeps some cells near the border are never seen.
+    # With it (the profile's 1 sweep) a node with a cell unseen for a sweep joins the lone
+    # walk's head, whose visits end when the square has held every such cell; the head is at
+    # most a walk through every node: within two sweeps again (beyond_paper/overdue_nodes.py).
     drop_off = PERSISTENT.with_overrides({'additions.drop_searched_nodes': False})
-    for case in (PERSISTENT, PERSISTENT.with_overrides({'search.sweep_slack': 0.0}), drop_off):
+    cases = [(PERSISTENT, start) for start in ((10.0, 60.0), (97.0, 3.0), (50.0, 50.0))]
+    cases += [(PERSISTENT.with_overrides({'search.sweep_slack': 0.0}), (10.0, 60.0)),
+              (drop_off, (10.0, 60.0))]
+    for case, start in cases:
         sweep = _sweep(case)
-        assert np.max(_revisit_gaps(case, int(3 * sweep))) <= 2 * sweep
+        assert np.max(_revisit_gaps(case, int(3 * sweep), start)) <= 2 * sweep
     starving = PERSISTENT.with_overrides({'search.overdue_sweeps': 0.0})
-    sweep = _sweep(starving)
-    gaps = _revisit_gaps(starving, int(3 * sweep))
-    assert np.max(gaps) > 2 * sweep
-    np.testing.assert_array_equal(MAP.centers[np.argmax(gaps)], [25.0, 55.0])
+    steps = int(3 * _sweep(starving))
+    gaps = _revisit_gaps(starving, steps)
+    assert np.max(gaps) == steps + 1                       # never seen
+    assert np.min(np.minimum(CELLS, 100.0 - CELLS)[np.argmax(gaps)]) < 1.0
     # The paper's density and planner (config/paper.yaml) sweep once, then wait for J to
     # bring nodes below beta (or revisit the least searched half): some wait far longer.
     paper = load_params_file('config/paper.yaml')
@@ -200,7 +283,7 @@ def _team_revisit_gaps(params, steps: int, seed: int) -> np.ndarray:
     gaps = np.zeros(MAP.size)
     for k in range(1, steps + 1):
         for pose in swarm.step().agent_poses.values():
-            _view(gaps, last, k, pose, params)
+            _view(gaps, last, k, nodes_in_view(MAP, pose, params.sensor.square_side))
     return np.maximum(gaps, steps + 1 - last)
 
 

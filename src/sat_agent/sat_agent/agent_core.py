@@ -317,7 +317,8 @@ class Agent:
             action, goal, plan = self.baseline.choose(pose, view)
         else:
             action, goal, plan = self.planner.choose(pose)
-            if self.params.search.sweep_slack > 0.0:
+            # A move that covers an overdue node's cells is taken exactly (overdue_nodes.py).
+            if self.params.search.sweep_slack > 0.0 and not self.planner.covering:
                 action = sweeping_action(pose, goal, self.params, self.filter.search)
             revisit = (self.revisit.revisit(view.step, pose, self.coasting.tracks, goal)
                        if look.keep is None else None)

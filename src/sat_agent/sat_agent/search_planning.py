@@ -241,6 +241,8 @@ class SearchPlanner:
         self._group = frozenset()
         self._planned = None     # every node's search value when the walk was planned
         self._reason = ReplanReason.NO_PLAN
+        # Whether next_goal is a pose the move must take exactly: never in the paper.
+        self.covering = False
         search, additions = params.search, params.additions
         self._nodes_to_search = (
             partial(revisit_fallback.nodes_to_search, beta=search.unvisited_threshold,
@@ -273,6 +275,7 @@ class SearchPlanner:
 
         With node_values (fused search values) and additions.drop_searched_nodes, nodes another
         agent searched meanwhile are dropped too (beyond_paper/drop_searched_nodes.py).
+        Persistent planning's overdue nodes are visited by their cells instead (``_visited``).
         """
         centers = self._map.centers[self._walk]
         side = self._params.sensor.square_side * self._params.search.visit_share
@@ -284,9 +287,14 @@ class SearchPlanner:
             planned = None if self._planned is None else self._planned[self._walk]
             visited |= self._searched_meanwhile(values[self._walk], planned,
                                                 self._params.search.unvisited_threshold)
+        visited = self._visited(_point(pose), visited)
         dropped = self._walk[visited]
         self._walk = self._walk[~visited]
         return dropped
+
+    def _visited(self, pose: np.ndarray, visited: np.ndarray) -> np.ndarray:
+        """Return the mask of the walk's nodes visited at pose: the rules above, the paper's."""
+        return visited
 
     def needs_replan(self, group: frozenset, released: bool,
                      resumed: bool = False, step: int = 0) -> ReplanReason:

@@ -1,23 +1,45 @@
-"""Addition: a lone agent takes first the nodes its square has not held for a whole sweep.
+"""Addition: a lone agent takes first the nodes whose ground its square has not held for a sweep.
 
 Paper: none. Its density never regrows, so a searched node waits for J to bring it back below
 beta (search_planning.SearchPlanner); persistent planning (persistent_planning.py) orders a
 walk by worth per metre and replans it alone when its next node has decayed.
 Why: with additions.drop_searched_nodes a node whose region was half searched by passes beside
 it leaves the walk, and its lower worth puts it late in every walk the decay rule replans: a lone
-agent with no target left one node centre, (25, 55), unseen for 768 steps, past the two sweeps
-(714 steps) within which the derivation has every node seen again
-(tests/test_persistent_planning.py).
-Addition (``search.overdue_sweeps`` > 0): the agent keeps, per node, the last step in SEARCH at
-which its own square held the node's centre (the paper's visit). A node is overdue once that
-age reaches overdue_sweeps sweeps, a sweep being the steps of a walk through every node at the
-search move's least progress per step, |V| s / (v - sweep_slack) (``sweep_steps``). While no
-other searching agent is in range: when a node out of the walk's overdue head becomes overdue
-the agent replans alone (ReplanReason.OVERDUE), the walk takes the overdue nodes first (worth
-per metre among them, then the others on from the last of them), and a walk whose next node
-is overdue is not replanned on decay. So an overdue node is seen again within
-the walk through the overdue nodes, which is at most the walk through all of them: within
-overdue_sweeps + 1 sweeps of its last visit.
+agent with no target left one node centre, (25, 55), unseen for 768 steps (session 54). And the
+paper's visit, a node's centre in the square, leaves ground unseen for good: a walk turns once
+the square's edge reaches a centre, 5 m off. Aging centres (session 54's rule) bounded a lone
+agent's wait on every centre to 391-445 steps, but over six sweeps from 8 starts some cells in
+the outermost metre were never seen and 7.6-10.9 % of all cells waited more than two sweeps
+(docs/persistent_trials.md, session 62).
+Addition (``search.overdue_sweeps`` > 0): the agent keeps the step at which its own square, in
+SEARCH, last held each cell of the search density's lattice (``CellViews``). A node is overdue
+once some cell of its region r_v has gone unseen for H = overdue_sweeps sweeps, a sweep being
+the steps of a walk through every node at the search move's least progress per step,
+|V| s / (v - sweep_slack) (``sweep_steps``). While no other searching agent is in range:
+
+- when a node that the walk's overdue head lacks becomes overdue, the agent replans alone
+  (ReplanReason.OVERDUE). The head keeps the overdue nodes it still holds, in their order, and
+  takes the new ones after them by the paper's cheapest arc; the other nodes follow by worth
+  per metre from the head's last node;
+- a node of the head is visited once none of its cells is overdue, not when its centre is in
+  view. Its goal is the admissible pose whose square holds most of its overdue cells (ties:
+  nearest to ``cover_point``, the point nearest to the agent whose square holds them all),
+  taken exactly, without the sweeping move's bend; while no pose holds one, the cover point;
+- a walk whose next node is in the head is not replanned on decay.
+
+Horizon: a cell unseen for H makes its node overdue; the node enters the head at once (or is in
+it), and no node enters the head ahead of it later (a joint plan, made when a searching agent
+comes in range, drops the head: the bound is a lone agent's). So it is reached within the walk
+through the head ahead of it, at most a walk through every node: one sweep, if a walk that
+covers flies as fast as one that visits centres (each cover move holds at least one overdue
+cell, so a visit ends within as many steps as the node has overdue cells once one is in reach;
+from three starts over six sweeps a lone agent made cover moves in 56 % of its steps, in runs
+of 5 steps, median, up to 37, that often span several nodes). Every cell is then seen within H
+plus a sweep: 714 steps for the persistent profile (tests/test_persistent_planning.py; measured
+at most 605 over 8 starts and six sweeps).
+The head takes only the overdue nodes and covers only their overdue cells: covering also the
+cells half a sweep old replanned less (10 OVERDUE replans in six sweeps against about 400) but
+waited longer (up to 649 steps against 609 in the same version of the code, same starts).
 Ages ignore the neighbours' squares and the steps out of SEARCH, so the rule waits for a lone
 agent: joint plans, which every member computes from the same inputs, are as before. A sweep of
 the persistent profile is 357 steps (100 nodes 10 m apart, 4 m a step less 1.2 m of slack), so
@@ -28,6 +50,8 @@ same.
 import numpy as np
 
 from sat_agent.config import SatParams
+from sat_agent.search_density import Lattice
+from sat_agent.search_map import SearchMap
 
 
 def sweep_steps(params: SatParams, node_count: int, node_spacing: float) -> float:
@@ -44,3 +68,79 @@ def sweep_steps(params: SatParams, node_count: int, node_spacing: float) -> floa
 def overdue_nodes(last_seen: np.ndarray, step: int, horizon: float) -> np.ndarray:
     """Return the indices of the nodes unseen for at least horizon steps at step."""
     return np.flatnonzero(step - np.asarray(last_seen) >= horizon)
+
+
+def cover_point(pose, cells: np.ndarray, side: float) -> np.ndarray:
+    """Return the point nearest to pose whose square of this side holds every one of (n, 2) cells.
+
+    Per axis the square holds [x - side / 2, x + side / 2], so x must lie in
+    [max - side / 2, min + side / 2]; cells spread wider than side: the middle of that span.
+    """
+    cells = np.asarray(cells, dtype=float).reshape(-1, 2)
+    low = cells.max(axis=0) - side / 2.0
+    high = cells.min(axis=0) + side / 2.0
+    return np.where(low <= high, np.clip(np.asarray(pose, dtype=float), low, high),
+                    (low + high) / 2.0)
+
+
+class CellViews:
+    """The step of the agent's own last view of each lattice cell, and each node's oldest.
+
+    A node's region r_v is search_density's (cells whose centre lies in the node's half-open
+    spacing square); a node whose region holds no cell centre has its nearest cell's view.
+    """
+
+    def __init__(self, lattice: Lattice, search_map: SearchMap, side: float):
+        self._xc, self._yc = lattice.x_centers(), lattice.y_centers()
+        self._side = side
+        self.seen = np.zeros((lattice.ny, lattice.nx))
+        half = search_map.spacing / 2.0
+        centers = search_map.centers
+        in_x = np.abs(self._xc[None, :] - centers[:, :1]) < half
+        in_y = np.abs(self._yc[None, :] - centers[:, 1:]) < half
+        labels = np.full(self.seen.shape, -1)
+        for node in range(search_map.size):   # once, at start: one rectangle per node
+            labels[np.ix_(in_y[node], in_x[node])] = node
+        self._labels = labels
+        self._nodes = np.arange(search_map.size)
+        # The cells sorted by node, so one reduceat gives every region's oldest view.
+        flat = labels.ravel()
+        inside = np.flatnonzero(flat >= 0)
+        self._by_node = inside[np.argsort(flat[inside], kind='stable')]
+        ordered = flat[self._by_node]
+        self._starts = np.flatnonzero(np.diff(ordered, prepend=-1) != 0)
+        self._with_cells = ordered[self._starts]
+        self._nearest = (np.abs(self._yc[None, :] - centers[:, 1:]).argmin(axis=1),
+                         np.abs(self._xc[None, :] - centers[:, :1]).argmin(axis=1))
+
+    def _held(self, pose) -> np.ndarray:
+        """Bool (ny, nx): the cells whose centre lies in S_a(pose)."""
+        half = self._side / 2.0
+        return np.outer(np.abs(self._yc - float(pose[1])) <= half,
+                        np.abs(self._xc - float(pose[0])) <= half)
+
+    def record(self, pose, step: int) -> None:
+        """Mark the cells S_a(pose) holds as seen at step."""
+        self.seen[self._held(pose)] = step
+
+    def oldest(self) -> np.ndarray:
+        """Return each node's oldest view over its region (V,)."""
+        oldest = self.seen[self._nearest]
+        if self._by_node.size:
+            oldest[self._with_cells] = np.minimum.reduceat(self.seen.ravel()[self._by_node],
+                                                           self._starts)
+        return oldest
+
+    def _unseen(self, step: int, age: float, pose) -> np.ndarray:
+        """Bool (ny, nx): cells unseen for age steps or more at step, but those held at pose."""
+        return (step - self.seen >= age) & ~self._held(pose) & (self._labels >= 0)
+
+    def unseen_counts(self, step: int, age: float, pose) -> np.ndarray:
+        """Return, per node, how many of its cells ``_unseen`` holds (V,)."""
+        return np.bincount(self._labels[self._unseen(step, age, pose)],
+                           minlength=self._nodes.size)
+
+    def unseen_cells(self, node: int, step: int, age: float, pose) -> np.ndarray:
+        """Return the centres (n, 2) of node's cells that ``_unseen`` holds."""
+        rows, cols = np.nonzero(self._unseen(step, age, pose) & (self._labels == node))
+        return np.column_stack([self._xc[cols], self._yc[rows]])

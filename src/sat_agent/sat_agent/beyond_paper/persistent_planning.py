@@ -28,9 +28,10 @@ Addition (``PersistentPlanner``):
 - a node of the walk that another agent searched meanwhile (with additions.
   drop_searched_nodes) is one whose fused worth fell below DROPPED_SHARE of its worth when
   the walk was planned;
-- with search.overdue_sweeps, a lone agent takes first the nodes its square has not held for
-  that many sweeps (beyond_paper/overdue_nodes.py): the decay replans and the drop above
-  would otherwise leave a node late in every walk.
+- with search.overdue_sweeps, a lone agent takes first the nodes with a cell its square has
+  not held for that many sweeps, and sees every such cell (beyond_paper/overdue_nodes.py): the
+  decay replans and the drop above would otherwise leave a node late in every walk, and the
+  paper's visit, a centre in the square, leaves part of its ground unseen.
 
 Why: targets are born all through the mission; a swarm that sweeps once never looks again
 where later targets appear, and one that plans on an absolute threshold either holds or
@@ -40,12 +41,15 @@ Switch: ``additions.persistent_planning`` (off: search_planning.SearchPlanner).
 
 import numpy as np
 
-from sat_agent.beyond_paper.overdue_nodes import overdue_nodes, sweep_steps
+from sat_agent.actions import candidate_poses
+from sat_agent.beyond_paper.overdue_nodes import (CellViews, cover_point, overdue_nodes,
+                                                  sweep_steps)
 from sat_agent.config import SatParams
-from sat_agent.search_density import SearchDensity
+from sat_agent.search_density import Lattice, SearchDensity
 from sat_agent.search_map import nodes_in_view, SearchMap
-from sat_agent.search_planning import (_costs, MIN_COST, own_visits_only, ReplanReason,
-                                       SearchPlanner)
+from sat_agent.search_planning import (_costs, ALONE_REASONS, MIN_COST, own_visits_only,
+                                       planned_walks, ReplanReason, SearchPlanner)
+from sat_agent.sensor_model import in_sensing_square
 
 # A scan removes p_D = 99 % of the undetected mass it covers; a node whose worth fell below
 # half of its planned worth was mostly covered by someone's square since (its worth only
@@ -85,7 +89,9 @@ class PersistentPlanner(SearchPlanner):
         sweeps = params.search.overdue_sweeps
         self._overdue_after = (sweeps * sweep_steps(params, search_map.size, search_map.spacing)
                                if sweeps > 0.0 else np.inf)
-        self._last_seen = np.zeros(search_map.size)
+        self._views = CellViews(Lattice.for_area(params.area, params.search.lattice_spacing),
+                                search_map, params.sensor.square_side)
+        self._step = 0
         self._overdue = np.zeros(0, dtype=np.int64)
         self._overdue_head = np.zeros(0, dtype=np.int64)
 
@@ -98,14 +104,22 @@ class PersistentPlanner(SearchPlanner):
         self._latest = (np.asarray(pose, dtype=float), node_values)
         return super().mark_visited(pose, node_values)
 
+    def plan(self, own_id: int, starts, node_values) -> list:
+        """SearchPlanner.plan; a joint plan has no overdue head (the rule is a lone agent's)."""
+        if self._reason not in ALONE_REASONS:
+            self._overdue_head = np.zeros(0, dtype=np.int64)
+        return super().plan(own_id, starts, node_values)
+
     def needs_replan(self, group: frozenset, released: bool, resumed: bool = False,
                      step: int = 0) -> ReplanReason:
         """SearchPlanner.needs_replan, and OVERDUE (beyond_paper/overdue_nodes.py)."""
         pose = self._latest[0]
-        if pose is not None:
-            self._last_seen[nodes_in_view(self._map, pose, self._params.sensor.square_side)] = step
-        self._overdue = (overdue_nodes(self._last_seen, step, self._overdue_after)
-                         if len(group) <= 1
+        ruled = np.isfinite(self._overdue_after)
+        if pose is not None and ruled:
+            self._views.record(pose, step)
+        self._step = step
+        self._overdue = (overdue_nodes(self._views.oldest(), step, self._overdue_after)
+                         if ruled and len(group) <= 1
                          else np.zeros(0, dtype=np.int64))
         reason = super().needs_replan(group, released, resumed, step)
         if not reason and self._overdue.size and self._pending_overdue().size:
@@ -117,19 +131,62 @@ class PersistentPlanner(SearchPlanner):
 
         A lone plan takes the unclaimed nodes, as _plan_alone does.
         """
-        takeable = np.intersect1d(self._claims.free(every_node(self._last_seen)), self._overdue)
+        takeable = np.intersect1d(self._claims.free(np.arange(self._map.size)), self._overdue)
         return np.setdiff1d(takeable, np.intersect1d(self._overdue_head, self._walk))
+
+    def _visited(self, pose: np.ndarray, visited: np.ndarray) -> np.ndarray:
+        """Return the visits: the paper's; an overdue-head node's once none of its cells is."""
+        head = np.isin(self._walk, self._overdue_head)
+        if not head.any():
+            return visited
+        left = self._views.unseen_counts(self._step, self._overdue_after, pose)
+        return np.where(head, left[self._walk] == 0, visited)
+
+    def next_goal(self):
+        """SearchPlanner.next_goal; for an overdue-head node, a pose to see its overdue cells.
+
+        The admissible pose whose square holds most of them (ties: nearest to their
+        cover_point), which the move takes exactly (``covering``); while none holds one, their
+        cover_point (beyond_paper/overdue_nodes.py).
+        """
+        goal = super().next_goal()
+        self.covering = False
+        pose = self._latest[0]
+        if pose is None or not self._walk.size or self._walk[0] not in self._overdue_head:
+            return goal
+        cells = self._views.unseen_cells(int(self._walk[0]), self._step, self._overdue_after,
+                                         pose)
+        if not cells.size:
+            return goal
+        side = self._params.sensor.square_side
+        target = cover_point(pose, cells, side)
+        poses = candidate_poses(pose, self._params.actions)
+        held = in_sensing_square(cells[None, :, :], poses[:, None, :], side).sum(axis=1)
+        if not held.any():
+            return target
+        self.covering = True
+        return poses[np.lexsort((_costs(target, poses), -held))[0]]
 
     def _walk_alone(self, own_id: int, start: np.ndarray, nodes: np.ndarray,
                     node_values: np.ndarray) -> np.ndarray:
-        """Return the overdue nodes' walk from start, then the others' from its last node."""
-        first = np.intersect1d(nodes, self._overdue)
+        """Return the overdue head from start, then the others' walk from its last node.
+
+        The head keeps the overdue nodes the walk's head still holds, in their order, and takes
+        the newly overdue after them by the cheapest arc (beyond_paper/overdue_nodes.py).
+        """
+        kept = self._walk[np.isin(self._walk, self._overdue_head) & np.isin(self._walk, nodes)]
+        first = np.setdiff1d(np.intersect1d(nodes, self._overdue), kept)
         self._overdue_head = np.zeros(0, dtype=np.int64)
-        if not first.size:
+        if not (first.size or kept.size):
             return super()._walk_alone(own_id, start, nodes, node_values)
-        head = super()._walk_alone(own_id, start, first, node_values)
+        head = kept
+        if first.size:
+            from_point = self._map.centers[kept[-1]] if kept.size else start
+            walks = planned_walks({own_id: from_point}, self._map.centers, first,
+                                  self._params.search.planner)
+            head = np.concatenate([kept, np.asarray(walks[own_id], dtype=np.int64)])
         tail = super()._walk_alone(own_id, self._map.centers[head[-1]],
-                                   np.setdiff1d(nodes, first), node_values)
+                                   np.setdiff1d(nodes, head), node_values)
         self._overdue_head = head
         return np.concatenate([head, tail])
 
@@ -139,10 +196,10 @@ class PersistentPlanner(SearchPlanner):
     def _decayed(self) -> bool:
         """Whether the next node pays less than DECAYED_SHARE of the best rate (docstring).
 
-        Never while the next node is overdue (beyond_paper/overdue_nodes.py).
+        Never while the next node is in the overdue head (beyond_paper/overdue_nodes.py).
         """
         pose, worth = self._latest
-        if worth is None or not self._walk.size or self._walk[0] in self._overdue:
+        if worth is None or not self._walk.size or self._walk[0] in self._overdue_head:
             return False
         worth = np.asarray(worth, dtype=float).reshape(-1)
         in_view = nodes_in_view(self._map, pose, self._params.sensor.square_side)
@@ -154,7 +211,8 @@ class PersistentPlanner(SearchPlanner):
         return bool(rate[0] < DECAYED_SHARE * rates.max(initial=0.0))
 
     def _nodes_out_of_view(self, node_values: np.ndarray, in_view: np.ndarray) -> np.ndarray:
-        return np.setdiff1d(every_node(node_values), in_view)
+        """Every node but those in view; an overdue one in view still has cells to see."""
+        return np.setdiff1d(every_node(node_values), np.setdiff1d(in_view, self._overdue))
 
     def _walk_worth(self, node_values: np.ndarray) -> np.ndarray:
         return node_values
