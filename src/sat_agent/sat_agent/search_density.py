@@ -122,6 +122,20 @@ def search_model(params: SatParams, lattice: Lattice):
     return ConstantDecay(params.search.decay)
 
 
+def observed_window(x_centers: np.ndarray, y_centers: np.ndarray, pose, side: float):
+    """Row and column slices of the cells whose centre lies in S_a(pose) (closed square).
+
+    The square is axis-aligned, so the observed cells form one rectangle of the lattice; None
+    when it holds no cell centre.
+    """
+    half = side / 2.0
+    cols = np.flatnonzero(np.abs(x_centers - float(pose[0])) <= half)
+    rows = np.flatnonzero(np.abs(y_centers - float(pose[1])) <= half)
+    if cols.size == 0 or rows.size == 0:
+        return None
+    return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+
+
 class SearchDensity:
     """Virtual-target part of the SAT-PHD (Eqns. satphd_predict, satphd_correct, search_value).
 
@@ -137,16 +151,8 @@ class SearchDensity:
         self._yc = lattice.y_centers()
 
     def _observed_window(self, pose, side: float):
-        """Row and column slices of the cells whose centre lies in S_a(pose) (closed square).
-
-        The square is axis-aligned, so the observed cells form one rectangle of the lattice.
-        """
-        half = side / 2.0
-        cols = np.flatnonzero(np.abs(self._xc - float(pose[0])) <= half)
-        rows = np.flatnonzero(np.abs(self._yc - float(pose[1])) <= half)
-        if cols.size == 0 or rows.size == 0:
-            return None
-        return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
+        """Row and column slices of the cells whose centre lies in S_a(pose) (observed_window)."""
+        return observed_window(self._xc, self._yc, pose, side)
 
     def predict(self, previous_pose) -> None:
         """Third line of Eqn. satphd_predict: D^0 <- [(1 - p_D(s_{k-1})) J + p_D(s_{k-1})] D^0.

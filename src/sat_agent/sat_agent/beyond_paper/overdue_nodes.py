@@ -50,7 +50,7 @@ same.
 import numpy as np
 
 from sat_agent.config import SatParams
-from sat_agent.search_density import Lattice
+from sat_agent.search_density import Lattice, observed_window
 from sat_agent.search_map import SearchMap
 
 
@@ -102,7 +102,7 @@ class CellViews:
         for node in range(search_map.size):   # once, at start: one rectangle per node
             labels[np.ix_(in_y[node], in_x[node])] = node
         self._labels = labels
-        self._nodes = np.arange(search_map.size)
+        self._node_count = search_map.size
         # The cells sorted by node, so one reduceat gives every region's oldest view.
         flat = labels.ravel()
         inside = np.flatnonzero(flat >= 0)
@@ -115,13 +115,17 @@ class CellViews:
 
     def _held(self, pose) -> np.ndarray:
         """Bool (ny, nx): the cells whose centre lies in S_a(pose)."""
-        half = self._side / 2.0
-        return np.outer(np.abs(self._yc - float(pose[1])) <= half,
-                        np.abs(self._xc - float(pose[0])) <= half)
+        held = np.zeros(self.seen.shape, dtype=bool)
+        window = observed_window(self._xc, self._yc, pose, self._side)
+        if window is not None:
+            held[window] = True
+        return held
 
     def record(self, pose, step: int) -> None:
         """Mark the cells S_a(pose) holds as seen at step."""
-        self.seen[self._held(pose)] = step
+        window = observed_window(self._xc, self._yc, pose, self._side)
+        if window is not None:
+            self.seen[window] = step
 
     def oldest(self) -> np.ndarray:
         """Return each node's oldest view over its region (V,)."""
@@ -138,7 +142,7 @@ class CellViews:
     def unseen_counts(self, step: int, age: float, pose) -> np.ndarray:
         """Return, per node, how many of its cells ``_unseen`` holds (V,)."""
         return np.bincount(self._labels[self._unseen(step, age, pose)],
-                           minlength=self._nodes.size)
+                           minlength=self._node_count)
 
     def unseen_cells(self, node: int, step: int, age: float, pose) -> np.ndarray:
         """Return the centres (n, 2) of node's cells that ``_unseen`` holds."""
