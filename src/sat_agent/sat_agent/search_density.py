@@ -136,6 +136,13 @@ def observed_window(x_centers: np.ndarray, y_centers: np.ndarray, pose, side: fl
     return slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1)
 
 
+def nearest_index(grid: np.ndarray, coords: np.ndarray) -> np.ndarray:
+    """Return the index of the centre of a regular grid nearest to each coordinate."""
+    spacing = grid[1] - grid[0] if grid.size > 1 else 1.0
+    index = np.floor((coords - grid[0]) / spacing + 0.5).astype(int)
+    return np.clip(index, 0, grid.size - 1)
+
+
 class SearchDensity:
     """Virtual-target part of the SAT-PHD (Eqns. satphd_predict, satphd_correct, search_value).
 
@@ -228,8 +235,8 @@ class SearchDensity:
         u = expected_undetected(self.values)
         if blur > 0.0 and len(points):
             u = ndimage.gaussian_filter(u, blur / self.lattice.spacing, mode='reflect')
-        return u[self._nearest_index(self._yc, points[:, 1]),
-                 self._nearest_index(self._xc, points[:, 0])]
+        return u[nearest_index(self._yc, points[:, 1]),
+                 nearest_index(self._xc, points[:, 0])]
 
     def _region_sums(self, cell_values: np.ndarray, node_centers: np.ndarray,
                      node_spacing: float):
@@ -244,15 +251,9 @@ class SearchDensity:
         np.cumsum(np.cumsum(cell_values, axis=0), axis=1, out=table[1:, 1:])
         sums = table[y1, x1] - table[y0, x1] - table[y1, x0] + table[y0, x0]
         counts = (x1 - x0) * (y1 - y0)
-        nearest = cell_values[self._nearest_index(self._yc, centers[:, 1]),
-                              self._nearest_index(self._xc, centers[:, 0])]
+        nearest = cell_values[nearest_index(self._yc, centers[:, 1]),
+                              nearest_index(self._xc, centers[:, 0])]
         return sums, counts, nearest
-
-    @staticmethod
-    def _nearest_index(grid: np.ndarray, coords: np.ndarray) -> np.ndarray:
-        spacing = grid[1] - grid[0] if grid.size > 1 else 1.0
-        index = np.floor((coords - grid[0]) / spacing + 0.5).astype(int)
-        return np.clip(index, 0, grid.size - 1)
 
     def fuse(self, other_values: np.ndarray) -> None:
         """Merge a density of the same step in place by elementwise max (Section "Cooperation").

@@ -50,7 +50,7 @@ same.
 import numpy as np
 
 from sat_agent.config import SatParams
-from sat_agent.search_density import Lattice, observed_window
+from sat_agent.search_density import Lattice, nearest_index, observed_window
 from sat_agent.search_map import SearchMap
 
 
@@ -88,6 +88,9 @@ class CellViews:
 
     A node's region r_v is search_density's (cells whose centre lies in the node's half-open
     spacing square); a node whose region holds no cell centre has its nearest cell's view.
+    Where the area is not a multiple of the spacing, the clipped last row or column of regions
+    overlaps its neighbour's (search_map); a cell they share counts for the later node only, so
+    every cell still ages one node.
     """
 
     def __init__(self, lattice: Lattice, search_map: SearchMap, side: float):
@@ -96,8 +99,10 @@ class CellViews:
         self.seen = np.zeros((lattice.ny, lattice.nx))
         half = search_map.spacing / 2.0
         centers = search_map.centers
-        in_x = np.abs(self._xc[None, :] - centers[:, :1]) < half
-        in_y = np.abs(self._yc[None, :] - centers[:, 1:]) < half
+        in_x = ((self._xc[None, :] >= centers[:, :1] - half)
+                & (self._xc[None, :] < centers[:, :1] + half))
+        in_y = ((self._yc[None, :] >= centers[:, 1:] - half)
+                & (self._yc[None, :] < centers[:, 1:] + half))
         labels = np.full(self.seen.shape, -1)
         for node in range(search_map.size):   # once, at start: one rectangle per node
             labels[np.ix_(in_y[node], in_x[node])] = node
@@ -110,8 +115,8 @@ class CellViews:
         ordered = flat[self._by_node]
         self._starts = np.flatnonzero(np.diff(ordered, prepend=-1) != 0)
         self._with_cells = ordered[self._starts]
-        self._nearest = (np.abs(self._yc[None, :] - centers[:, 1:]).argmin(axis=1),
-                         np.abs(self._xc[None, :] - centers[:, :1]).argmin(axis=1))
+        self._nearest = (nearest_index(self._yc, centers[:, 1]),
+                         nearest_index(self._xc, centers[:, 0]))
 
     def _held(self, pose) -> np.ndarray:
         """Bool (ny, nx): the cells whose centre lies in S_a(pose)."""
