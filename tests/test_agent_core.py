@@ -138,10 +138,14 @@ def test_foreign_and_malformed_reports_are_dropped():
     nan_pose = dataclasses.replace(report, pose=np.array([np.nan, 1.0]))
     own = dataclasses.replace(report, agent_id=1)
     future = dataclasses.replace(report, step=5)
-    out = agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [future, bad_shape, nan_pose, own, report,
-                                                        report])
-    # Ignored: the future report; dropped: bad shape, NaN pose, own id, the second copy.
-    assert agent.dropped_reports == 4
+    # Node views (persistent planning's overdue rule): none or one per node, none after step 1.
+    few_views = dataclasses.replace(report, node_views=np.zeros(3, dtype=np.int64))
+    late_views = dataclasses.replace(report, node_views=np.full(agent.search_map.size, 2))
+    out = agent.step(2, (50.0, 50.0), NO_MEASUREMENTS, [future, bad_shape, nan_pose, own,
+                                                        few_views, late_views, report, report])
+    # Ignored: the future report; dropped: bad shape, NaN pose, own id, the two with malformed
+    # node views, the second copy.
+    assert agent.dropped_reports == 6
     assert out.replan == ReplanReason.NEW_NEIGHBOUR
 
 

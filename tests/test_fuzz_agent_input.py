@@ -241,3 +241,33 @@ def test_ten_thousand_messages_were_thrown(fuzz):
     """Guard: the property test above really ran its batches (it runs first, same module)."""
     assert fuzz.batches == BATCHES
     assert fuzz.sent['valid'] + sum(fuzz.sent['invalid'].values()) >= 10_000
+
+
+def test_whole_reports_with_malformed_node_views_are_dropped_and_counted(fuzz):
+    """Node views are checked with the whole report, when the agent steps.
+
+    Not one per node of its search map, or one after the report's step, drops the report under
+    that reason (persistent planning's overdue rule, beyond_paper/overdue_nodes.py).
+    """
+    rng = np.random.default_rng(7)
+    accepted, dropped = fuzz.totals()
+    step = fuzz.scan_step
+    for sender, views in ((2, [0, 1, 2]), (3, [step + 1] * 100)):
+        msg = density(sender, step, None, rng)
+        msg.node_views = array('I', views)
+        fuzz.pubs['search_density'].publish(msg)
+        fuzz.pubs['estimate'].publish(estimate(sender, step, None, rng))
+        fuzz.pubs['mode'].publish(AgentMode(agent_id=sender, step=step,
+                                            position=Point(x=1.0, y=2.0)))
+    # Every message is valid on its own; the scan of the next step makes the agent read them.
+    spin_until(fuzz.node, lambda: fuzz.totals()[0] >= accepted + 6, 60,
+               'the agent accepting the six messages', (fuzz.agent,))
+    fuzz.send('measurements', None, rng)
+
+    def counted():
+        now = fuzz.totals()[1]
+        return all(now.get(reason, 0) >= dropped.get(reason, 0) + 1
+                   for reason in ('wrong_length', 'out_of_range'))
+    spin_until(fuzz.node, counted, 60, 'the two reports dropped as wrong_length, out_of_range',
+               (fuzz.agent,))
+    assert fuzz.agent.poll() is None, 'the agent died'

@@ -25,6 +25,8 @@ def report_bytes(request):
     Both profiles: the persistent one's density travels in the other layout (density_codec.py).
     """
     agent = Agent(1, load_params_file(CONFIG / f'{request.param}.yaml'), (50.0, 50.0), seed=3)
+    # The persistent profile's density carries the nodes' views (none for the paper's).
+    assert len(agent.planner.node_views()) == (100 if request.param == 'persistent' else 0)
     rng = np.random.default_rng(3)
     for k in range(1, 4):
         output = agent.step(k, (50.0, 50.0 + k), rng.uniform((0, -3), (7, 3), (4, 2)), [])
@@ -41,8 +43,11 @@ def test_parsed_bytes_give_the_message_and_its_validated_content(report_bytes):
         assert (msg.agent_id, msg.step) == (1, 3)
         expected = report_part_from_msg(kind, msg, lattice)
         if kind == 'search_density':
-            np.testing.assert_array_equal(part, report.search_values)
-            assert not part.flags.writeable     # shared between agents: must stay read-only
+            values, views = part
+            np.testing.assert_array_equal(values, report.search_values)
+            np.testing.assert_array_equal(views, report.node_views)
+            # Shared between agents: must stay read-only.
+            assert not (values.flags.writeable or views.flags.writeable)
         elif kind == 'estimate':
             assert part.targets and part.cardinality == expected.cardinality
             np.testing.assert_array_equal(part.positions(), report.target_positions())

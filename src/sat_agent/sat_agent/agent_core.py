@@ -60,6 +60,7 @@ from sat_agent.baselines import baseline_policy
 from sat_agent.baselines.interface import BaselineView
 from sat_agent.beyond_paper.investigation import (
     Investigation, keep_in_view_action, Look, NO_LOOK)
+from sat_agent.beyond_paper.overdue_nodes import node_views_defect
 from sat_agent.beyond_paper.peak_extraction import PeakExtractor
 from sat_agent.beyond_paper.persistent_planning import PersistentPlanner
 from sat_agent.beyond_paper.sweeping_move import sweeping_action
@@ -80,7 +81,8 @@ from sat_agent.tracking_overlap import OverlapMonitor
 
 # Radio accounting: payload bytes of the three messages of a report (what the paper exchanges),
 # without DDS/RTPS overhead. Every message carries agent id and step (uint32 each); the density
-# is its compressed float32 cells (density_codec.py); the estimate has the pose, the
+# is its compressed float32 cells (density_codec.py) and its node views (uint32 each, none
+# without persistent planning's overdue rule); the estimate has the pose, the
 # cardinality (float64) and per target position, velocity (2 float64 each), a 4 x 4 covariance
 # and a weight (float64); the mode message has the mode (uint8) and the pose. The ROS radio
 # counts with the same function.
@@ -88,6 +90,7 @@ REPORT_KINDS = ('search_density', 'estimate', 'mode')
 _ID_STEP_BYTES = 4 + 4
 _POSE_BYTES = 2 * 8
 _TARGET_BYTES = 8 * (2 + 2 + 16 + 1)
+_VIEW_BYTES = 4
 # Spawn-key prefix of the agents' filter generators, plus phd.filter_stream. A world seeded with
 # the same scenario seed spawns its truth and sensor streams with keys (0,), (1,), ...
 # (SeedSequence.spawn); a filter keyed (agent_id,) would replay its own sensor's draws, so its
@@ -97,10 +100,13 @@ FILTER_STREAM = 2 ** 16
 JOINT_REASONS = (ReplanReason.NEW_NEIGHBOUR, ReplanReason.RELEASED, ReplanReason.PERIODIC)
 
 
-def wire_bytes(kind: str, count: int = 0) -> int:
-    """Payload bytes of one radio message: count = encoded density bytes or estimated targets."""
+def wire_bytes(kind: str, count: int = 0, views: int = 0) -> int:
+    """Payload bytes of one radio message.
+
+    count: encoded density bytes or estimated targets; views: the density's node views.
+    """
     if kind == 'search_density':
-        return _ID_STEP_BYTES + count
+        return _ID_STEP_BYTES + count + _VIEW_BYTES * views
     if kind == 'estimate':
         return _ID_STEP_BYTES + _POSE_BYTES + 8 + _TARGET_BYTES * count
     if kind == 'mode':
@@ -114,7 +120,9 @@ class AgentReport:
 
     agent_id, step and pose are header data; search_values is the (ny, nx) search density
     (values in [0, 1], search_density.py's convention) after fusion at step k; encoding: the
-    radio's layout of it that the sender's density model suits (density_codec.py).
+    radio's layout of it that the sender's density model suits (density_codec.py); node_views:
+    the step of the oldest view of each search node's cells the sender knows of, or none
+    (SearchPlanner.node_views; beyond_paper/overdue_nodes.py).
     """
 
     agent_id: int
@@ -124,6 +132,7 @@ class AgentReport:
     search_values: np.ndarray
     estimate: MultiTargetEstimate
     encoding: str = PATCHES
+    node_views: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @cached_property
     def encoded_search_values(self) -> bytes:
@@ -133,7 +142,8 @@ class AgentReport:
     @property
     def nbytes(self) -> int:
         """Payload bytes of the report's three radio messages (see wire_bytes)."""
-        return (wire_bytes('search_density', len(self.encoded_search_values))
+        return (wire_bytes('search_density', len(self.encoded_search_values),
+                           len(self.node_views))
                 + wire_bytes('estimate', len(self.estimate.targets)) + wire_bytes('mode'))
 
     def target_positions(self) -> np.ndarray:
@@ -282,13 +292,17 @@ class Agent:
         # so in-process and ROS runs exchange the very same values.
         report = AgentReport(self.agent_id, int(step), pose.copy(), mode,
                              self.filter.search.values.astype(np.float32), estimate,
-                             self.filter.search.model.wire_encoding)
+                             self.filter.search.model.wire_encoding, self._node_views())
         self.filter.predict(pose)
         view = BaselineView(int(step), self.filter.targets, report, tuple(reports))
         action, goal, plan = self._control(mode, pose, estimate, view)
         self._last_report = report
         return AgentOutput(int(action), np.asarray(goal, dtype=float), report, estimate, plan,
                            mode, leaving_for, replan, coasting.coasted)
+
+    def _node_views(self) -> np.ndarray:
+        """Return the planner's node views for the report; none when a baseline searches."""
+        return self.planner.node_views() if self.baseline is None else np.zeros(0, np.int64)
 
     def _control(self, mode: Mode, pose: np.ndarray, estimate: MultiTargetEstimate,
                  view: BaselineView):
@@ -345,7 +359,9 @@ class Agent:
                     and report.agent_id not in kept
                     and np.shape(report.search_values) == shape
                     and np.all(np.isfinite(report.search_values))
-                    and np.shape(report.pose) == (2,) and np.all(np.isfinite(report.pose)))
+                    and np.shape(report.pose) == (2,) and np.all(np.isfinite(report.pose))
+                    and node_views_defect(report.node_views, self.search_map.size,
+                                          report.step) is None)
             if good:
                 kept[report.agent_id] = report
             else:
@@ -398,6 +414,7 @@ class Agent:
         """
         own_values = self.search_map_values(self.filter.search.values)
         self.planner.mark_visited(pose, own_values)
+        self.planner.hear_views([(r.pose, r.step, r.node_views) for r in reports])
         searching = [r for r in reports if r.mode == Mode.SEARCH]
         group = frozenset([self.agent_id] + [r.agent_id for r in searching])
         released = any(r.mode != Mode.SEARCH and r.agent_id in self.planner.group

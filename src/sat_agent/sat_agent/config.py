@@ -364,12 +364,14 @@ class SearchParams:
         0.0, "how much farther (m) from the walk's next node than the nearest admissible "
         'pose a search move may end, to take the square holding the most undetected targets '
         "(0: the paper's xi_search; beyond_paper/sweeping_move.py)", low=0, high=MANY)
-    # 1 in config/persistent.yaml: a lone agent sees every cell again within two sweeps
-    # (sessions 54 and 62); a sweep is 357 steps there, so no run of 200 steps changes.
+    # 1 in config/persistent.yaml: a lone agent sees every cell again within two sweeps, a
+    # team of four within 391-435 steps over 1,500 (sessions 54, 62 and 63); a sweep is 357
+    # steps there, so no run of 200 steps changes but for the radio's node views.
     overdue_sweeps: float = param(
-        0.0, 'additions.persistent_planning: a lone agent takes first, and sees whole, the '
-        'nodes with a cell its square has not held for this many sweeps of every node (0: '
-        'never; beyond_paper/overdue_nodes.py)', low=0, high=MANY)
+        0.0, 'additions.persistent_planning: an agent takes first, and sees whole, the nodes '
+        "with a cell no square it knows of (its own, its neighbours', their reports' node "
+        'views) has held for this many sweeps of every node (0: never, and no node views on '
+        'the radio; beyond_paper/overdue_nodes.py)', low=0, high=MANY)
     # Follows the regrowing density; 10 steps fly ~4 nodes at the top speed of 4 m/step.
     replan_period: int = param(
         10, 'additions.persistent_planning: every agent in SEARCH replans (jointly with the '

@@ -200,7 +200,7 @@ class ReplanReason(enum.IntEnum):
     EXHAUSTED = 5      # every node of the own walk is visited
     PERIODIC = 6       # additions.persistent_planning: a joint replan at every replan_period
     DECAYED = 7        # additions.persistent_planning: the walk collects too little worth
-    OVERDUE = 8        # search.overdue_sweeps: a lone agent's node went unseen too long
+    OVERDUE = 8        # search.overdue_sweeps: a node went unseen too long
 
 
 # Replans made alone, on the agent's own values (the others are joint when others are in range).
@@ -295,6 +295,13 @@ class SearchPlanner:
     def _visited(self, pose: np.ndarray, visited: np.ndarray) -> np.ndarray:
         """Return the mask of the walk's nodes visited at pose: the rules above, the paper's."""
         return visited
+
+    def hear_views(self, views: Sequence[tuple]) -> None:
+        """Note what others saw, (pose, step, node_views) of their reports: the paper uses none."""
+
+    def node_views(self) -> np.ndarray:
+        """Return what a report tells of the nodes' views: nothing in the paper."""
+        return np.zeros(0, dtype=np.int64)
 
     def needs_replan(self, group: frozenset, released: bool,
                      resumed: bool = False, step: int = 0) -> ReplanReason:

@@ -28,10 +28,11 @@ Addition (``PersistentPlanner``):
 - a node of the walk that another agent searched meanwhile (with additions.
   drop_searched_nodes) is one whose fused worth fell below DROPPED_SHARE of its worth when
   the walk was planned;
-- with search.overdue_sweeps, a lone agent takes first the nodes with a cell its square has
-  not held for that many sweeps, and sees every such cell (beyond_paper/overdue_nodes.py): the
-  decay replans and the drop above would otherwise leave a node late in every walk, and the
-  paper's visit, a centre in the square, leaves part of its ground unseen.
+- with search.overdue_sweeps, an agent takes first the nodes with a cell no square it knows of
+  (its own, its neighbours', what their reports' node views say) has held for that many
+  sweeps, and sees every such cell (beyond_paper/overdue_nodes.py): the decay replans and the
+  drop above would otherwise leave a node late in every walk, and the paper's visit, a centre
+  in the square, leaves part of its ground unseen.
 
 Why: targets are born all through the mission; a swarm that sweeps once never looks again
 where later targets appear, and one that plans on an absolute threshold either holds or
@@ -94,6 +95,7 @@ class PersistentPlanner(SearchPlanner):
         self._step = 0
         self._overdue = np.zeros(0, dtype=np.int64)
         self._overdue_head = np.zeros(0, dtype=np.int64)
+        self._heard = np.zeros(search_map.size)
 
     def node_values(self, density: SearchDensity) -> np.ndarray:
         """Each node's worth: the expected undetected targets in its region."""
@@ -104,11 +106,41 @@ class PersistentPlanner(SearchPlanner):
         self._latest = (np.asarray(pose, dtype=float), node_values)
         return super().mark_visited(pose, node_values)
 
+    def hear_views(self, views) -> None:
+        """Age the cells the reports' squares held as seen, and merge the reports' node views.
+
+        beyond_paper/overdue_nodes.py.
+        """
+        if np.isfinite(self._overdue_after):
+            for pose, step, node_views in views:
+                self._views.record(pose, step)
+                if np.size(node_views):
+                    # Each view, the report's or the own, bounds the oldest of the node's cells
+                    # from below, so their maximum does too (malformed ones were dropped).
+                    self._heard = np.maximum(self._heard, node_views)
+
+    def node_views(self) -> np.ndarray:
+        """Return each node's oldest view this agent knows of (beyond_paper/overdue_nodes.py)."""
+        if not np.isfinite(self._overdue_after):
+            return super().node_views()
+        return np.maximum(self._views.oldest(), self._heard).astype(np.int64)
+
     def plan(self, own_id: int, starts, node_values) -> list:
-        """SearchPlanner.plan; a joint plan has no overdue head (the rule is a lone agent's)."""
-        if self._reason not in ALONE_REASONS:
-            self._overdue_head = np.zeros(0, dtype=np.int64)
-        return super().plan(own_id, starts, node_values)
+        """SearchPlanner.plan; a joint plan's own walk takes its overdue nodes first.
+
+        The partition is every member's (the same inputs); only the order of the own walk
+        changes: the overdue head, then the rest in the joint plan's order
+        (beyond_paper/overdue_nodes.py).
+        """
+        joint = self._reason not in ALONE_REASONS
+        # The head's nodes the old walk no longer holds were visited.
+        self._overdue_head = self._overdue_head[np.isin(self._overdue_head, self._walk)]
+        super().plan(own_id, starts, node_values)
+        if joint:
+            head = self._overdue_first(own_id, self._start, self._walk)
+            self._walk = np.concatenate([head, self._walk[~np.isin(self._walk, head)]])
+            self._overdue_head = head
+        return self._walk.tolist()
 
     def needs_replan(self, group: frozenset, released: bool, resumed: bool = False,
                      step: int = 0) -> ReplanReason:
@@ -118,18 +150,17 @@ class PersistentPlanner(SearchPlanner):
         if pose is not None and ruled:
             self._views.record(pose, step)
         self._step = step
-        self._overdue = (overdue_nodes(self._views.oldest(), step, self._overdue_after)
-                         if ruled and len(group) <= 1
-                         else np.zeros(0, dtype=np.int64))
+        self._overdue = (overdue_nodes(self.node_views(), step, self._overdue_after)
+                         if ruled else np.zeros(0, dtype=np.int64))
         reason = super().needs_replan(group, released, resumed, step)
         if not reason and self._overdue.size and self._pending_overdue().size:
             reason = self._reason = ReplanReason.OVERDUE
         return reason
 
     def _pending_overdue(self) -> np.ndarray:
-        """Return the overdue nodes a lone plan would take but the walk's overdue head lacks.
+        """Return the overdue nodes a replan alone would take but the walk's overdue head lacks.
 
-        A lone plan takes the unclaimed nodes, as _plan_alone does.
+        A replan alone takes the unclaimed nodes (_plan_alone).
         """
         takeable = np.intersect1d(self._claims.free(np.arange(self._map.size)), self._overdue)
         return np.setdiff1d(takeable, np.intersect1d(self._overdue_head, self._walk))
@@ -140,7 +171,8 @@ class PersistentPlanner(SearchPlanner):
         if not head.any():
             return visited
         left = self._views.unseen_counts(self._step, self._overdue_after, pose)
-        return np.where(head, left[self._walk] == 0, visited)
+        seen = (left[self._walk] == 0) | ~np.isin(self._walk, self._overdue)
+        return np.where(head, seen, visited)
 
     def next_goal(self):
         """SearchPlanner.next_goal; for an overdue-head node, a pose to see its overdue cells.
@@ -167,27 +199,30 @@ class PersistentPlanner(SearchPlanner):
         self.covering = True
         return poses[np.lexsort((_costs(target, poses), -held))[0]]
 
+    def _overdue_first(self, own_id: int, start: np.ndarray, nodes: np.ndarray) -> np.ndarray:
+        """Return the overdue head over nodes, from start (beyond_paper/overdue_nodes.py).
+
+        It keeps the nodes of the last head still in the walk and among nodes, in their order,
+        and takes the other overdue nodes after them by the cheapest arc.
+        """
+        head = self._overdue_head
+        kept = head[np.isin(head, self._walk) & np.isin(head, nodes)]
+        first = np.setdiff1d(np.intersect1d(nodes, self._overdue), kept)
+        if not first.size:
+            return kept
+        from_point = self._map.centers[kept[-1]] if kept.size else start
+        walks = planned_walks({own_id: from_point}, self._map.centers, first,
+                              self._params.search.planner)
+        return np.concatenate([kept, np.asarray(walks[own_id], dtype=np.int64)])
+
     def _walk_alone(self, own_id: int, start: np.ndarray, nodes: np.ndarray,
                     node_values: np.ndarray) -> np.ndarray:
-        """Return the overdue head from start, then the others' walk from its last node.
-
-        The head keeps the overdue nodes the walk's head still holds, in their order, and takes
-        the newly overdue after them by the cheapest arc (beyond_paper/overdue_nodes.py).
-        """
-        kept = self._walk[np.isin(self._walk, self._overdue_head) & np.isin(self._walk, nodes)]
-        first = np.setdiff1d(np.intersect1d(nodes, self._overdue), kept)
-        self._overdue_head = np.zeros(0, dtype=np.int64)
-        if not (first.size or kept.size):
+        """Return the overdue head from start, then the others' walk from its last node."""
+        head = self._overdue_head = self._overdue_first(own_id, start, nodes)
+        if not head.size:
             return super()._walk_alone(own_id, start, nodes, node_values)
-        head = kept
-        if first.size:
-            from_point = self._map.centers[kept[-1]] if kept.size else start
-            walks = planned_walks({own_id: from_point}, self._map.centers, first,
-                                  self._params.search.planner)
-            head = np.concatenate([kept, np.asarray(walks[own_id], dtype=np.int64)])
         tail = super()._walk_alone(own_id, self._map.centers[head[-1]],
                                    np.setdiff1d(nodes, head), node_values)
-        self._overdue_head = head
         return np.concatenate([head, tail])
 
     def _periodic(self, step: int, group: frozenset) -> bool:

@@ -71,6 +71,7 @@ from sensor_msgs.msg import PointCloud2
 
 from sat_agent.actions import candidate_poses
 from sat_agent.agent_core import Agent, REPORT_KINDS
+from sat_agent.beyond_paper.overdue_nodes import node_views_defect
 from sat_agent.config import SatParams
 from sat_agent.message_auth import Signer, StepWindow, WORLD_SENDER
 from sat_agent.node_params import AgentNodeParams
@@ -89,6 +90,7 @@ from sat_agent.ros.robot_input import detections_from_msg, pose_from_msg, RobotP
 from sat_agent.ros.ros_params import NodeParameters
 from sat_agent.ros.signed_io import auth_key, SignedPublisher, VerifiedInput
 from sat_agent.search_density import Lattice
+from sat_agent.search_map import SearchMap
 from sat_agent.stamps import step_at, views_due
 from sat_agent.topic_names import (AGENT_VIEWS, radio_topic, ROBOT_DETECTIONS, ROBOT_GOAL,
                                    ROBOT_POSE, VIEW_PREFIX)
@@ -125,6 +127,8 @@ class AgentNode(Node):
         self._finished_at = None      # when /world/step said the run is finished
         self.core = None
         self.lattice = Lattice.for_area(self.params.area, self.params.search.lattice_spacing)
+        self.search_nodes = SearchMap.for_area(self.params.area,
+                                               self.params.search.node_spacing).size
         self.last_step = 0
         self.guard = InputGuard(self, f'agent_{self.agent_id}',
                                 self.node_params.diagnostics_period)
@@ -310,7 +314,14 @@ class AgentNode(Node):
                 self.guard.drop('partial_report',
                                 f'agent {sender} step {sent}: only {sorted(parts)}')
                 continue
-            reports.append(report_from_parts(sender, sent, parts))
+            report = report_from_parts(sender, sent, parts)
+            defect = node_views_defect(report.node_views, self.search_nodes, sent)
+            if defect:
+                self.guard.drop(defect, f'agent {sender} step {sent}: '
+                                f'{len(report.node_views)} node views for '
+                                f'{self.search_nodes} nodes, or one after the step')
+                continue
+            reports.append(report)
         self._radio = {key: parts for key, parts in self._radio.items() if key[1] >= step}
         return reports
 

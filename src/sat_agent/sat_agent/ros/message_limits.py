@@ -6,7 +6,8 @@ on or off: rclpy builds the Python objects of a typed message before any check c
 (10 scans of 10^6 detections: 358 MB deserialized against 131 MB raw). Each limit is the
 serialized size of the largest message a valid sender can send, so it follows the message
 definitions and the parameters by construction: every list at its bound (MAX_DETECTIONS,
-MAX_TARGETS, the roster, the lattice, STATUS_PARTICLES), every string at MAX_NAME characters.
+MAX_TARGETS, the roster, the lattice, the search map's nodes, STATUS_PARTICLES), every string
+at MAX_NAME characters.
 """
 
 from dataclasses import dataclass
@@ -68,7 +69,7 @@ class MessageLimits:
             scan=_size(MeasurementSet(header=_header(),
                                       detections=[RangeBearing()] * MAX_DETECTIONS)),
             command=_size(ControlCommand(header=_header())),
-            density=_size(SearchDensity(header=_header())) + _PADDING
+            density=_size(SearchDensity(header=_header(), node_views=[0] * nodes)) + _PADDING
             + max_encoded_bytes(lattice.nx * lattice.ny),
             estimate=_size(_estimate()),
             mode=_size(AgentMode(header=_header())),

@@ -142,10 +142,11 @@ def grid_info(lattice: Lattice) -> GridInfo:
 
 
 def density_to_msg(agent_id: int, step: int, encoded: bytes, lattice: Lattice,
-                   dt: float) -> SearchDensity:
+                   dt: float, node_views=()) -> SearchDensity:
     """Build a SearchDensity message from density_codec.encode_density's bytes."""
     return SearchDensity(header=header(step, dt), agent_id=int(agent_id), step=int(step),
-                         grid=grid_info(lattice), values_zlib=array('B', encoded))
+                         grid=grid_info(lattice), values_zlib=array('B', encoded),
+                         node_views=array('I', np.asarray(node_views, dtype=np.uint32)))
 
 
 def check_grid(grid: GridInfo, lattice: Lattice):
@@ -169,6 +170,17 @@ def density_from_msg(msg: SearchDensity, lattice: Lattice) -> np.ndarray:
     return values
 
 
+def node_views_from_msg(msg: SearchDensity) -> np.ndarray:
+    """Return a SearchDensity's node views, read-only (shared between agents: radio_parsing).
+
+    Checked with the whole report (agent_node, overdue_nodes.node_views_defect): their count is
+    the receiver's search map's.
+    """
+    views = np.asarray(msg.node_views, dtype=np.int64)
+    views.flags.writeable = False
+    return views
+
+
 # -- mode -----------------------------------------------------------------------------------
 
 def mode_to_msg(agent_id: int, step: int, pose, mode: Mode, dt: float) -> AgentMode:
@@ -190,7 +202,7 @@ def mode_from_msg(msg: AgentMode) -> Mode:
 def report_to_msgs(report: AgentReport, lattice: Lattice, dt: float):
     """Split a core AgentReport into the three radio messages (density, estimate, mode)."""
     return (density_to_msg(report.agent_id, report.step, report.encoded_search_values,
-                           lattice, dt),
+                           lattice, dt, report.node_views),
             estimate_to_msg(report.agent_id, report.step, report.pose, report.estimate, dt),
             mode_to_msg(report.agent_id, report.step, report.pose, report.mode, dt))
 
@@ -198,12 +210,13 @@ def report_to_msgs(report: AgentReport, lattice: Lattice, dt: float):
 def report_part_from_msg(kind: str, msg, lattice: Lattice):
     """Validate one radio message and return its content for report_from_parts.
 
-    search_density -> (ny, nx) values; estimate -> MultiTargetEstimate; mode -> (Mode, pose).
+    search_density -> ((ny, nx) values, node views); estimate -> MultiTargetEstimate;
+    mode -> (Mode, pose).
     """
     if msg.agent_id == 0:
         raise InvalidMessage('unknown_sender', 'agent id 0')
     if kind == 'search_density':
-        return density_from_msg(msg, lattice)
+        return density_from_msg(msg, lattice), node_views_from_msg(msg)
     if kind == 'estimate':
         return estimate_from_msg(msg)
     if kind == 'mode':
@@ -214,5 +227,6 @@ def report_part_from_msg(kind: str, msg, lattice: Lattice):
 def report_from_parts(sender: int, step: int, parts) -> AgentReport:
     """Join the validated contents of one sender's three messages of one step."""
     mode, pose = parts['mode']
+    values, node_views = parts['search_density']
     return AgentReport(agent_id=int(sender), step=int(step), pose=pose, mode=mode,
-                       search_values=parts['search_density'], estimate=parts['estimate'])
+                       search_values=values, estimate=parts['estimate'], node_views=node_views)

@@ -366,11 +366,10 @@ class WorldSimNode(Node):
         self.guard.accept(f'radio/out/{kind}')
         self._reports[agent_id].add(kind)
         if kind == 'search_density':
-            count = len(msg.values_zlib)
+            nbytes = wire_bytes(kind, len(msg.values_zlib), len(msg.node_views))
         else:
-            count = len(part.targets) if kind == 'estimate' else 0
-        self.radio.send(msg.step, agent_id, kind, data, wire_bytes(kind, count),
-                        self.world.poses())
+            nbytes = wire_bytes(kind, len(part.targets) if kind == 'estimate' else 0)
+        self.radio.send(msg.step, agent_id, kind, data, nbytes, self.world.poses())
         if self.clock == 'real_time' and self.radio.delay_steps == 0:
             # Real-time agents do not wait for their inbox, so nothing is gained by holding
             # the step's reports back for one burst at the next step's start, together with
