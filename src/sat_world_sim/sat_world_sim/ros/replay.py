@@ -7,7 +7,10 @@ Live::
 publishes every recorded message (its original CDR bytes) on its topic with the recorded QoS
 profile and the original timing divided by ``--rate``; any subscriber (the logger, a test) sees
 the run again. The recorded ``/clock`` is published like any topic, so nodes with
-``use_sim_time`` follow the run's sim time.
+``use_sim_time`` follow the run's sim time. Topics recorded with a definition other than the
+installed one (a bag of an older version) are left out, named on stderr: today's nodes would
+misread their bytes, and a signed message cannot be rewritten without breaking its signature.
+The offline replay reads them with the bag's own definitions.
 
 Offline (``--offline --out DIR``, no ROS graph): sat_world_sim.bag_replay.replay_offline.
 The last line printed is the output directory.
@@ -22,12 +25,13 @@ from typing import Optional, Sequence
 import rclpy
 from rclpy.duration import Duration
 from rclpy.qos import QoSProfile
-from rosbags.rosbag2 import Reader
+from rosbags.highlevel import AnyReaderError
 
 from sat_agent.config import load_params_file, ParameterError, SatParams
 from sat_agent.ros.msg_conversions import message_class
 
-from sat_world_sim.bag_replay import bag_agent_ids, raw_messages, replay_offline, selected
+from sat_world_sim.bag_replay import (bag_agent_ids, open_bag, outdated, raw_messages,
+                                      replay_offline, selected)
 from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics, Topic
 
@@ -59,34 +63,53 @@ def _wait_for_subscribers(node, publishers, timeout: float):
 def replay_live(bag: Path, rate: float, loop: bool, topics: Optional[Sequence[str]],
                 match_timeout: float = 5.0) -> int:
     """Publish the bag onto the live graph (module docstring); return the messages sent."""
+    with open_bag(bag) as reader:
+        connections = live_connections(reader, selected(reader, topics))
+        return _publish(reader, connections, rate, loop, match_timeout)
+
+
+def live_connections(reader, connections):
+    """Return the connections today's nodes read as recorded; say which are left out, and why."""
+    stale = outdated(reader, connections)
+    if stale and len(stale) == len(connections):
+        raise ValueError(f'every selected topic was recorded with a definition other than the '
+                         f'installed one ({sorted({t for _, t in stale})}): replay it --offline, '
+                         f"which reads the bag's own definitions")
+    if stale:
+        print(f'replay: leaving out {len(stale)} topics recorded with a definition other than '
+              f'the installed one (an older version; --offline reads them): '
+              f'{[topic for topic, _ in stale]}', file=sys.stderr)
+    return [c for c in connections if (c.topic, c.msgtype) not in set(stale)]
+
+
+def _publish(reader, connections, rate: float, loop: bool, match_timeout: float) -> int:
+    """Publish the connections' messages at the recorded pace / rate; return how many."""
     rclpy.init()
     node = rclpy.create_node('bag_replay')
     sent = 0
     try:
-        with Reader(bag) as reader:
-            connections = selected(reader, topics)
-            latched = {t.name for t in graph_topics(bag_agent_ids(reader)) if t.latched}
-            publishers = {c.id: node.create_publisher(
-                message_class(c.msgtype), c.topic,
-                deep(topic_qos(Topic(c.topic, c.msgtype, c.topic in latched))))
-                for c in connections}
-            _wait_for_subscribers(node, publishers.values(), match_timeout)
-            while True:
-                start_wall, start_bag = time.monotonic(), None
-                for connection, stamp, raw in raw_messages(reader, connections):
-                    start_bag = stamp if start_bag is None else start_bag
-                    due = start_wall + (stamp - start_bag) / 1e9 / rate
-                    _spin_for(node, due - time.monotonic())
-                    publishers[connection.id].publish(bytes(raw))
-                    sent += 1
-                if not loop:
-                    break
-            # A reliable writer drops what readers have not acknowledged when it is destroyed.
-            unacked = [p.topic_name for p in publishers.values()
-                       if not p.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT_S))]
-            if unacked:
-                print(f'replay: messages on {unacked} not acknowledged by every reader after '
-                      f'{ACK_TIMEOUT_S} s', file=sys.stderr)
+        latched = {t.name for t in graph_topics(bag_agent_ids(reader)) if t.latched}
+        publishers = {c.id: node.create_publisher(
+            message_class(c.msgtype), c.topic,
+            deep(topic_qos(Topic(c.topic, c.msgtype, c.topic in latched))))
+            for c in connections}
+        _wait_for_subscribers(node, publishers.values(), match_timeout)
+        while True:
+            start_wall, start_bag = time.monotonic(), None
+            for connection, stamp, raw in raw_messages(reader, connections):
+                start_bag = stamp if start_bag is None else start_bag
+                due = start_wall + (stamp - start_bag) / 1e9 / rate
+                _spin_for(node, due - time.monotonic())
+                publishers[connection.id].publish(bytes(raw))
+                sent += 1
+            if not loop:
+                break
+        # A reliable writer drops what readers have not acknowledged when it is destroyed.
+        unacked = [p.topic_name for p in publishers.values()
+                   if not p.wait_for_all_acked(Duration(seconds=ACK_TIMEOUT_S))]
+        if unacked:
+            print(f'replay: messages on {unacked} not acknowledged by every reader after '
+                  f'{ACK_TIMEOUT_S} s', file=sys.stderr)
     finally:
         node.destroy_node()
         rclpy.try_shutdown()
@@ -130,7 +153,7 @@ def main(argv=None) -> int:
         else:
             sent = replay_live(args.bag, args.rate, args.loop, args.topics, args.match_timeout)
             print(f'replayed {sent} messages from {args.bag}', file=sys.stderr)
-    except (ParameterError, ValueError) as error:
+    except (ParameterError, ValueError, AnyReaderError) as error:
         print(f'replay: {error}', file=sys.stderr)
         return 2
     except KeyboardInterrupt:
