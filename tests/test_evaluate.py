@@ -1,6 +1,7 @@
-from dataclasses import field, make_dataclass
+from dataclasses import field, make_dataclass, replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from sat_agent.config import load_params_file, SatParams
@@ -10,12 +11,13 @@ from sat_world_sim.evaluate import QUICK_STEPS, RUNS_CSV, SUMMARY_MD, TABLE_MARK
 from sat_world_sim.evaluate import read_rows, write_csv
 from sat_world_sim.inprocess_swarm import run_swarm
 from sat_world_sim.metrics import compute_metrics
-from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
+from sat_world_sim.random_scenarios import long_mission_scenario, paper_random_scenario
+from sat_world_sim.random_scenarios import random_scenario
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import ablation_cells, Cell, CONFIG_COLUMNS, default_cell
 from sat_world_sim.study_design import DESIGNS, factorial_cells, persistent_ablation_cells
 from sat_world_sim.study_design import ORACLE, ORACLE_LABEL, ORACLE_TRACK
-from sat_world_sim.study_design import prepare_cells, reference_of
+from sat_world_sim.study_design import prepare_cells, reference_of, scenario_for
 
 CONFIG = Path(__file__).resolve().parent.parent / 'config'
 PAPER = load_scenario(CONFIG / 'scenarios' / 'paper.yaml')
@@ -53,6 +55,28 @@ def test_randomised_paper_setting_keeps_the_papers_team_and_draws_two_targets():
     assert len({s.targets for s in scenarios}) == 100
 
 
+def test_a_long_mission_keeps_the_random_defaults_team_and_births_targets_throughout():
+    scenarios = [long_mission_scenario(seed, 4, 1000) for seed in range(1, 41)]
+    assert long_mission_scenario(7, 4, 1000) == scenarios[6]
+    births = np.array([t.born for s in scenarios for t in s.targets])
+    # Born over steps 1-950, so each lives its shortest life (50 steps) in the mission ...
+    assert births.min() >= 1 and births.max() <= 950
+    # ... uniformly (each quarter of the span holds about a quarter) ...
+    quarters = np.histogram(births, bins=4, range=(1, 951))[0] / births.size
+    assert np.all(np.abs(quarters - 0.25) < 0.05)
+    # ... at the random default's mean rate: 6 targets over its 150 steps of births, 0.04 a
+    # step, 38 a mission (Poisson: the mean of 40 seeds within 3 sd of it).
+    assert abs(births.size / 40 - 38) < 3
+    for seed, scenario in enumerate(scenarios, start=1):
+        assert scenario.agents == random_scenario(seed, 4, 200).agents
+        assert all(50 <= t.died - t.born + 1 <= 150 for t in scenario.targets)
+    # 200 steps: births over 1-150, as the random default's.
+    assert max(t.born for seed in range(1, 41)
+               for t in long_mission_scenario(seed, 4, 200).targets) <= 150
+    long = replace(default_cell('long'), steps=1000)
+    assert scenario_for(long, 3, SatParams(), PAPER) == long_mission_scenario(3, 4, 1000)
+
+
 @pytest.mark.parametrize('script', sorted(METRIC_WORDS))
 def test_every_metric_column_is_told_apart_from_the_configuration_by_the_acceptance_words(script):
     # The acceptance script groups runs into cells by every column that holds none of its
@@ -86,7 +110,8 @@ def test_the_default_design_has_every_policy_strict_and_oracle_where_the_issue_a
     # other policies there.
     assert not [c for c in cells if c.planner == 'ortools' and c.setting == 'paper']
     assert {c.setting for c in DESIGNS['full'] if c.planner == 'ortools'} == {
-        'paper', 'paper_random', 'random'}
+        'paper', 'paper_random', 'random', 'long'}
+    assert not [c for c in cells if c.setting == 'long']
     paper = {c.label for c in cells if c.setting == 'paper'}
     assert any('strict' in label for label in paper) and any('oracle' in label for label in paper)
     # The acceptance scripts find the oracle at the random default by these columns, and take

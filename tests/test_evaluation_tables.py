@@ -2,11 +2,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from sat_world_sim.evaluate import cells_of, COSTS, main, METRICS, PER_CELL, row_sections
-from sat_world_sim.evaluate import RUNS_CSV, SUMMARY_MD, TABLE_MARKERS, write_csv
-from sat_world_sim.evaluate import TARGET_COLUMNS, TARGET_STEPS, TARGETS_CSV
+from sat_world_sim.evaluate import BIRTH_TIME, cells_of, COSTS, main, METRICS, PER_CELL
+from sat_world_sim.evaluate import row_sections, RUNS_CSV, SUMMARY_MD, TABLE_MARKERS
+from sat_world_sim.evaluate import TARGET_COLUMNS, TARGET_STEPS, TARGETS_CSV, write_csv
 from sat_world_sim.evaluation_plots import write_figures
-from sat_world_sim.evaluation_tables import rivals_table, study_tables, table_cells
+from sat_world_sim.evaluation_tables import birth_time_table, rivals_table, study_tables
+from sat_world_sim.evaluation_tables import table_cells
 from sat_world_sim.evaluation_tables import target_phases, target_step_table
 from sat_world_sim.study_design import CONFIG_COLUMNS, default_cell, ORACLE, ORACLE_LABEL
 from sat_world_sim.study_design import PERSISTENT_LABEL, rivals_of, STRICT_LABEL
@@ -175,6 +176,38 @@ def test_target_step_table_pools_the_seeds_and_says_why_targets_were_missed():
     assert line(table, 0, cell.label) == (
         f'| random | {cell.label} | 300 | 56.7 | 20.0 | 23.3 | 16.7 | 71.4 | 3 | 1 | 1 |')
     assert target_step_table([cell], rows, []) == ''
+
+
+def test_birth_time_table_tells_the_targets_born_after_the_first_pass():
+    persistent, rival, oracle = (replace(cell, setting='long', steps=1000)
+                                 for cell in (PERSISTENT, REFERENCE, ORACLE_CELL))
+    cells = [persistent, rival, oracle]
+    rows = [dict(cell.columns(), seed=seed, **dict.fromkeys(METRICS, 1.0))
+            for cell in cells for seed in (1, 2, 3)]
+    targets = []
+    for seed in (1, 2, 3):
+        for cell in cells:
+            # Born during the first pass and found; born later: one found by every cell, one
+            # found by the oracle always, by the persistent profile but on seed 3, never by
+            # the rival.
+            last = {persistent: 710 if seed != 3 else '', rival: '', oracle: 705}[cell]
+            targets += [target_row(cell, seed, 100, '180', 120, 130),
+                        target_row(cell, seed, 500, '600', 505, 510),
+                        target_row(cell, seed, 700, '', 705, last)]
+    table = birth_time_table(cells, rows, targets)
+    # Later-born shares per seed: persistent 1, 1, 1/2; the rival 1/2 each; the oracle 1.
+    assert line(table, 0, persistent.label).startswith(
+        f'| long | {persistent.label} | 3 | 3 | 100 | 6 | 83 | 83 % [')
+    assert line(table, 0, persistent.label).endswith('|  |')
+    rival_line = line(table, 0, rival.label)
+    assert rival_line.startswith(f'| long | {rival.label} | 3 | 3 | 100 | 6 | 50 | 50 %')
+    assert rival_line.split(' | ')[-1].startswith('+33 [')   # (1/2 + 1/2 + 0) / 3
+    assert line(table, 0, oracle.label).split(' | ')[7] == 'n/a'
+    # Runs no longer than the first pass: no table, and no section in the summary.
+    short = [replace(cell, steps=200) for cell in cells]
+    assert birth_time_table(short, rows, targets) == ''
+    assert BIRTH_TIME in row_sections(cells, rows, targets)
+    assert BIRTH_TIME not in row_sections(short, rows, targets)
 
 
 def test_the_persistent_ablation_is_paired_with_the_persistent_profile(tmp_path):

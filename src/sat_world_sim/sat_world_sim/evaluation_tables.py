@@ -14,6 +14,10 @@
   (``target_phases``: before any square held the target, in view but not yet detected, after
   its first detection), how much of the last is tracked, and why missed targets were missed
   (never in a square, or in one but never detected); from evaluation_targets.csv.
+- ``birth_time_table``: for runs longer than a first pass (a long mission, study_design's
+  ``long``), the share detected of the targets born during it and after it, against the
+  ceiling, and the persistent profile minus each rival on the later-born; from
+  evaluation_targets.csv.
 
 Tables, not claims: prose goes around them, written by people who read them.
 """
@@ -30,7 +34,7 @@ from sat_world_sim.study_design import ADDITIONS_GROUP, ceiling_of, Cell, factor
 from sat_world_sim.study_design import is_persistent, is_persistent_ablation, is_setting_reference
 from sat_world_sim.study_design import reference_of
 from sat_world_sim.study_design import rivals_of, STRICT_PROFILE
-from sat_world_sim.study_design import sweep_cells
+from sat_world_sim.study_design import STEPS, sweep_cells
 
 MARK = '*'
 
@@ -240,6 +244,50 @@ def target_step_table(cells: Sequence[Cell], rows: Sequence[dict],
         entries += [_fmt(100 * tracked / total.sum(), 1),
                     _fmt(100 * tracked / total[2], 1) if total[2] else 'n/a',
                     f'{count:.0f}', f'{never_seen:.0f}', f'{unconfirmed:.0f}']
+        lines.append(_line(entries))
+    return '\n'.join(lines) if len(lines) > 2 else ''
+
+
+def birth_time_table(cells: Sequence[Cell], rows: Sequence[dict], targets: Sequence[dict],
+                     first_pass: int = STEPS) -> str:
+    """Per cell whose runs outlast first_pass steps: the targets born during it and after.
+
+    The targets born by step first_pass (the evaluation's run length: the first pass) and
+    those born later, each counted and their detected share pooled over the seeds; of the later
+    ones, the share per seed as a fraction of the oracle sweep's (ceiling_of) and the persistent
+    profile minus each of its rivals (rivals_of), paired by seed (a seed with no later birth is
+    left out). '' when no run outlasts first_pass.
+    """
+    data = by_seed(rows)
+    during: Dict[str, np.ndarray] = defaultdict(lambda: np.zeros(2))
+    later: Dict[str, Dict[int, np.ndarray]] = defaultdict(lambda: defaultdict(lambda: np.zeros(2)))
+    for target in targets:
+        name, seed = f"{target['setting']}/{target['label']}", int(_number(target['seed']))
+        if seed not in data[name]['steps']:
+            continue
+        counts = np.array([1, _number(target['first_detected']) is not None])
+        if int(_number(target['born'])) <= first_pass:
+            during[name] += counts
+        else:
+            later[name][seed] += counts
+    shares = {name: {seed: found / count for seed, (count, found) in seeds.items()}
+              for name, seeds in later.items()}
+    persistent = {c.setting: c for c in cells if is_persistent(c)}
+    header = ['setting', 'configuration', 'N', f'born by k = {first_pass}', 'detected %',
+              'born later', 'detected %', 'later: of ceiling', 'persistent − it, later']
+    lines = _header(header)
+    for cell in (c for c in cells if c.steps > first_pass):
+        pooled = sum(later[cell.name].values(), np.zeros(2))
+        oracle, leader = ceiling_of(cell, cells), persistent.get(cell.setting)
+        mine = shares.get(cell.name, {})
+        entries = [cell.setting, cell.label, str(len(data[cell.name]['seed']))]
+        for count, found in (during[cell.name], pooled):
+            entries += [f'{count:.0f}', _fmt(100 * found / count, 0) if count else 'n/a']
+        entries.append('n/a' if oracle is None or oracle == cell else _ratio_entry(
+            mine, shares.get(oracle.name, {})))
+        rival = leader is not None and cell in rivals_of(leader, cells)
+        entries.append(_difference_entry(shares.get(leader.name, {}), mine, 100.0, 0) or 'n/a'
+                       if rival else '')
         lines.append(_line(entries))
     return '\n'.join(lines) if len(lines) > 2 else ''
 

@@ -9,8 +9,12 @@ Settings (a scenario per seed, ``scenario_for``):
   seed (random_scenarios.paper_random_scenario: born in [80, 150], living 30-80 steps).
 - ``random``: the random default (random_scenarios.random_scenario: 4 agents starting anywhere,
   2-10 targets born over steps 1-150).
+- ``long``: a long mission (random_scenarios.long_mission_scenario: the random default's team
+  and starts, targets born throughout the mission at the random default's mean rate). Run it
+  with ``--steps`` (e.g. 1000): at 200 steps its births span steps 1-150 as the random
+  default's do.
 
-All three: lambda = 10, C_R = 50 m, 200 steps unless a cell changes them.
+All: lambda = 10, C_R = 50 m, 200 steps unless a cell changes them.
 
 A cell is a setting, a label (unique in its setting) and a configuration: a profile (parameter
 file ``config/<profile>.yaml``), the search policy and planner, the clutter rate, the radio
@@ -49,7 +53,7 @@ names them among the baselines the persistent profile must lead). 1800 runs took
 on an idle machine (``evaluate --dry-run`` prints the estimate from the last study's costs). Not in
 it, reachable with ``--design full`` or ``--only``: the paper setting's other policies, the
 ablation at paper and random (+22 min at random), the persistent profile's ablation at random
-(9 cells, ~+23 min) and the sweeps (+18 min).
+(9 cells, ~+23 min), the sweeps (+18 min) and the long mission's policy cells.
 
 Cells that cannot be built on this checkout (a profile file that does not exist yet, a policy
 or parameter the core does not know yet, e.g. on an older checkout) are skipped with a
@@ -70,7 +74,8 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from sat_agent.config import load_params_file, ParameterError, SatParams
 
-from sat_world_sim.random_scenarios import paper_random_scenario, random_scenario
+from sat_world_sim.random_scenarios import long_mission_scenario, paper_random_scenario
+from sat_world_sim.random_scenarios import random_scenario
 from sat_world_sim.scenario import Scenario
 
 STEPS = 200
@@ -111,7 +116,8 @@ class Setting:
 SETTINGS = {s.name: s for s in (
     Setting('paper', "paper's scenario (2 agents, 2 scripted targets)", 2, True),
     Setting('paper_random', 'randomised paper setting (2 agents, 2 drawn targets)', 2, True),
-    Setting('random', 'random default (4 agents, 2-10 targets)', 4, False))}
+    Setting('random', 'random default (4 agents, 2-10 targets)', 4, False),
+    Setting('long', 'long mission (4 agents, targets born throughout)', 4, False))}
 
 
 @dataclass(frozen=True)
@@ -263,7 +269,7 @@ def _designs() -> Dict[str, List[Cell]]:
     fits = policy_cells('paper_random') + ablation_cells('paper_random') + policy_cells('random')
     full = (policy_cells('paper') + ablation_cells('paper') + policy_cells('paper_random')
             + ablation_cells('paper_random') + policy_cells('random') + ablation_cells('random')
-            + persistent_ablation_cells('random') + sweep_cells())
+            + persistent_ablation_cells('random') + sweep_cells() + policy_cells('long'))
     return {'default': paper + fits, 'full': _unique(full), 'factorial': factorial_cells()}
 
 
@@ -398,4 +404,6 @@ def scenario_for(cell: Cell, seed: int, params: SatParams, paper: Scenario) -> S
         return replace(paper.with_seed(seed), steps=cell.steps)
     if cell.setting == 'paper_random':
         return paper_random_scenario(seed, paper, cell.steps, width, height)
+    if cell.setting == 'long':
+        return long_mission_scenario(seed, cell.agents, cell.steps, width, height)
     return random_scenario(seed, cell.agents, cell.steps, width, height)
