@@ -12,10 +12,13 @@ detection, and why a found target goes untracked). Means over the seeds with 95 
 A diagnostic: its figures are the profile's on the seeds given, never a reported result.
 
     scripts/with_env.sh python scripts/ospa_breakdown.py [--setting random] [--seeds 40]
-        [--first-seed 6761] [--params config/persistent.yaml] [--jobs 2]
+        [--first-seed 6761] [--params config/persistent.yaml] [--steps 200] [--jobs 2]
+
+--steps: a longer run (the long mission's, e.g. ``--setting long --steps 1000``).
 """
 
 import argparse
+from dataclasses import replace
 from multiprocessing import Pool
 from pathlib import Path
 
@@ -28,7 +31,7 @@ from sat_world_sim.ospa_breakdown import what_if_ospa, WHAT_IFS
 from sat_world_sim.paired_statistics import mean_interval
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.study_design import default_cell, PERSISTENT_LABEL, PERSISTENT_PROFILE
-from sat_world_sim.study_design import scenario_for, SETTINGS
+from sat_world_sim.study_design import scenario_for, SETTINGS, STEPS
 from sat_world_sim.target_steps import AFTER, BEFORE, CATEGORIES, TargetStepLedger
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,8 +43,9 @@ def one_seed(job) -> tuple:
     What-if OSPAs; false report-steps per source and the OSPA without each; per regime the
     share of steps and its part of the OSPA; target-steps per category.
     """
-    setting, params_path, seed = job
-    cell = default_cell(setting, PERSISTENT_LABEL, profile=PERSISTENT_PROFILE)
+    setting, params_path, steps, seed = job
+    cell = replace(default_cell(setting, PERSISTENT_LABEL, profile=PERSISTENT_PROFILE),
+                   steps=steps)
     params = cell.params(load_params_file(params_path))
     scenario = scenario_for(cell, seed, params,
                             load_scenario(ROOT / 'config' / 'scenarios' / 'paper.yaml'))
@@ -62,16 +66,19 @@ def main(argv=None) -> int:
     parser.add_argument('--seeds', type=int, default=40)
     parser.add_argument('--first-seed', type=int, default=6761)
     parser.add_argument('--params', default=str(ROOT / 'config' / 'persistent.yaml'))
+    parser.add_argument('--steps', type=int, default=STEPS)
     parser.add_argument('--jobs', type=int, default=2)
     args = parser.parse_args(argv)
-    if args.seeds < 1 or args.jobs < 1:
-        parser.error(f'--seeds {args.seeds}, --jobs {args.jobs}: both must be at least 1')
-    jobs = [(args.setting, args.params, seed)
+    if min(args.seeds, args.jobs, args.steps) < 1:
+        parser.error(f'--seeds {args.seeds}, --jobs {args.jobs}, --steps {args.steps}: each '
+                     f'must be at least 1')
+    jobs = [(args.setting, args.params, args.steps, seed)
             for seed in range(args.first_seed, args.first_seed + args.seeds)]
     with Pool(args.jobs) as pool:
         what_ifs, counts, without, shares, parts, steps = (
             np.array(part, dtype=float) for part in zip(*pool.map(one_seed, jobs)))
-    print(f'{args.setting}, seeds {jobs[0][2]}-{jobs[-1][2]}, {args.params}')
+    print(f'{args.setting}, {args.steps} steps, seeds {jobs[0][-1]}-{jobs[-1][-1]}, '
+          f'{args.params}')
     print('what-if: mean OSPA (m) [95 % t interval], change against reported')
     for column, name in enumerate(WHAT_IFS):
         change = what_ifs[:, column] - what_ifs[:, 0]

@@ -17,10 +17,11 @@ evaluation.csv; ``cost_model``).
 
 Outputs in ``--out`` (docs/ by default): evaluation.csv (one row per run: CONFIG_COLUMNS, seed,
 METRICS), evaluation_targets.csv (one row per target), evaluation_summary.md (every table and
-how the study was made) and the figures; ``--readme`` writes the README's tables between its
+how the study was made; with runs longer than STEPS, a long mission's, the targets born after
+the first pass) and the figures; ``--readme`` writes the README's tables between its
 markers. ``--tables-only`` runs nothing: it writes the tables of ``--out``'s evaluation.csv
-again, into that summary (with its per-cell and cost sections) and ``--readme`` (after a change
-to the tables, or to rows merged from runs made apart).
+again, into that summary (with its sections that come from the rows) and ``--readme`` (after
+a change to the tables, or to rows merged from runs made apart).
 
     evaluate [--design default|full|factorial] [--only SETTING/LABEL ...] [--set KEY=VALUE ...]
              [--seeds 50] [--first-seed 1] [--jobs N] [--scheduler local|tcp://HOST:PORT]
