@@ -79,7 +79,8 @@ def live_connections(reader, connections):
         print(f'replay: leaving out {len(stale)} topics recorded with a definition other than '
               f'the installed one (an older version; --offline reads them): '
               f'{[topic for topic, _ in stale]}', file=sys.stderr)
-    return [c for c in connections if (c.topic, c.msgtype) not in set(stale)]
+    left_out = set(stale)
+    return [c for c in connections if (c.topic, c.msgtype) not in left_out]
 
 
 def _publish(reader, connections, rate: float, loop: bool, match_timeout: float) -> int:
