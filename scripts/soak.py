@@ -19,6 +19,7 @@ resident memory (VmRSS) and the sizes of the bag and of run.rrd. It prints:
 Not part of `make test`: 5,000 steps take tens of minutes.
 
     scripts/with_env.sh python scripts/soak.py [--steps 5000] [--agents 4] [--json]
+    scripts/with_env.sh python scripts/soak.py --params config/persistent.yaml   # a profile
 """
 
 import argparse
@@ -189,8 +190,8 @@ def report(figures: dict, max_growth: float) -> bool:
           f"({sizes['bag_bytes_per_1000_steps'] / 1e6:.1f} MB per 1,000 steps), run.rrd "
           f"{sizes['final']['rrd'] / 1e6:.1f} MB "
           f"({sizes['rrd_bytes_per_1000_steps'] / 1e6:.1f} MB per 1,000 steps)")
-    print(f"{figures['steps']} steps, {figures['agents']} agents in {figures['wall_s']:.0f} s, "
-          f"bring-up exit code {figures['exit_code']}")
+    print(f"{figures['steps']} steps, {figures['agents']} agents ({figures['params']}) in "
+          f"{figures['wall_s']:.0f} s, bring-up exit code {figures['exit_code']}")
     grown = [n for n, f in figures['rss'].items() if f['growth_pct'] >= max_growth]
     left = figures['left_running']
     print(f"left running after the bring-up returned: {', '.join(map(str, left)) or 'nothing'}")
@@ -205,6 +206,8 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--steps', type=int, default=5000)
     parser.add_argument('--agents', type=int, default=4)
+    parser.add_argument('--params', type=Path, default=ROOT / 'config' / 'paper.yaml',
+                        help="the agents' profile (default: config/paper.yaml)")
     parser.add_argument('--warm-up', type=float, default=0.1,
                         help='share of the steps after which the reference RSS is taken')
     parser.add_argument('--window', type=float, default=0.1,
@@ -218,6 +221,10 @@ def main() -> int:
     args = parser.parse_args()
     if args.run_dir is not None and args.run_dir.exists():
         parser.error(f'--run-dir {args.run_dir} exists already')
+    if not args.params.is_file():
+        parser.error(f'--params {args.params}: no such file '
+                     '(a profile, e.g. config/persistent.yaml)')
+    args.params = args.params.resolve()
     # The watcher joins the run's private domain, localhost only, like the bring-up's children;
     # this process holds the claim (domain_ids) until it exits, after the swarm.
     domain = claim_domain_id()
@@ -231,7 +238,7 @@ def main() -> int:
         started = time.monotonic()
         swarm = subprocess.Popen(
             [executable('sat_world_sim', 'swarm'), '--scenario', str(scenario),
-             '--params', str(ROOT / 'config' / 'paper.yaml'), '--run-dir', str(run_dir),
+             '--params', str(args.params), '--run-dir', str(run_dir),
              '--domain-id', str(domain), '--quiet', '--timeout', str(args.steps * 2 + 600)],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         watcher = Watcher(swarm, run_dir, args.sample_every)
@@ -242,7 +249,8 @@ def main() -> int:
         wall = time.monotonic() - started
         metrics_path = run_dir / 'metrics.json'
         steps = len(json.loads(metrics_path.read_text())['steps']) if metrics_path.is_file() else 0
-        figures = {'steps': steps, 'agents': args.agents, 'wall_s': round(wall, 1),
+        figures = {'steps': steps, 'agents': args.agents, 'params': str(args.params),
+                   'wall_s': round(wall, 1),
                    'exit_code': swarm.returncode,
                    'rss': rss_figures(watcher.rss, warm_up, window, args.steps),
                    'rss_window': [warm_up, warm_up + window - 1, args.steps - window + 1,
