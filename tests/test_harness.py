@@ -51,24 +51,22 @@ def test_failed_tests_are_never_rerun(pytestconfig):
     assert not pytestconfig.pluginmanager.has_plugin('rerunfailures')
 
 
-def chosen_profile(pytestconfig):
-    return pytestconfig.getoption('hypothesis_profile', None) or 'suite'
-
-
 def test_hypothesis_draws_the_same_examples_every_run_without_deadlines(pytestconfig):
     from hypothesis import settings
-    if chosen_profile(pytestconfig) != 'suite':
+    if pytestconfig.getoption('hypothesis_profile', None) not in (None, 'suite'):
         pytest.skip('another Hypothesis profile was chosen for this session')
     assert settings.default.derandomize and settings.default.deadline is None
 
 
-def test_every_property_test_of_the_session_follows_the_chosen_profile(request, pytestconfig):
+def test_every_property_test_of_the_session_follows_the_chosen_profile(request):
     """A test's own @settings must not pin the draw, or --hypothesis-profile=explore skips it.
 
     Settings are bound when a test is decorated, so this reads each collected test's own.
     """
-    derandomized = chosen_profile(pytestconfig) == 'suite'
-    found = {item.nodeid: settings_of.derandomize for item in request.session.items
-             if (settings_of := getattr(getattr(item, 'function', None),
-                                        '_hypothesis_internal_use_settings', None))}
-    assert {nodeid: flag for nodeid, flag in found.items() if flag != derandomized} == {}
+    from hypothesis import is_hypothesis_test, settings
+    tests = {item.nodeid: item.function for item in request.session.items
+             if is_hypothesis_test(getattr(item, 'function', None))}
+    pinned = {nodeid for nodeid, test in tests.items()
+              if test._hypothesis_internal_use_settings.derandomize
+              != settings.default.derandomize}
+    assert pinned == set()
