@@ -12,10 +12,15 @@
    without the recorder and the logger (``--bare``): their load grows with the radio traffic,
    as the square of the swarm's size, and on 2 cores it is what stops the largest swarms.
 
+``--params`` picks the agents' profile for every run (default ``config/paper.yaml``): the
+persistent profile's regrowing density is a larger radio payload than the paper's.
+``--no-auth`` runs every swarm without message authentication (the bring-up's flag), to measure
+what signing and verifying cost.
+
 Run from the repository after `make test` (the workspace must be built)::
 
-    scripts/with_env.sh python scripts/bench_swarm.py [--json] [--sizes 4 8 16 24 32] \
-        [--composed 16 24 32 48 64] [--bare 48 64]
+    scripts/with_env.sh python scripts/bench_swarm.py [--json] [--params P] [--no-auth] \
+        [--sizes 4 8 16 24 32] [--composed 16 24 32 48 64] [--bare 48 64]
 
 With --json the last line is a JSON object with every figure.
 """
@@ -30,6 +35,7 @@ import time
 import numpy as np
 import yaml
 
+from sat_agent.config import load_params_file, ParameterError
 from sat_world_sim import bringup
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,10 +43,13 @@ PARAMS = ROOT / 'config' / 'paper.yaml'
 PAPER = ROOT / 'config' / 'scenarios' / 'paper.yaml'
 
 
-def run(scenario: Path, run_dir: Path, *extra) -> tuple:
-    """Run the bring-up; return (exit code, wall seconds, metrics dict or None)."""
+def run(scenario: Path, common: list, run_dir: Path, *extra) -> tuple:
+    """Run the bring-up; return (exit code, wall seconds, metrics dict or None).
+
+    common: the options of every run (the profile, authentication).
+    """
     started = time.perf_counter()
-    code = bringup.main(['--scenario', str(scenario), '--params', str(PARAMS),
+    code = bringup.main(['--scenario', str(scenario), *common,
                          '--run-dir', str(run_dir), '--quiet', *extra])
     wall = time.perf_counter() - started
     path = run_dir / 'metrics.json'
@@ -68,7 +77,7 @@ def per_agent_step(metrics: dict) -> tuple:
             sum(r['bytes'] for r in radio) / agents / steps)
 
 
-def real_time_sizes(sizes, composed: bool, steps: int, work: Path,
+def real_time_sizes(sizes, composed: bool, steps: int, common: list, work: Path,
                     observers: bool = True) -> list:
     """Try each swarm size at 1 Hz; return one result dict per size.
 
@@ -84,7 +93,7 @@ def real_time_sizes(sizes, composed: bool, steps: int, work: Path,
         if not observers:
             extra += ['--no-record', '--no-view']
         name = f'rt_{"c" if composed else "p"}{"" if observers else "b"}_{size}'
-        code, wall, metrics = run(scenario, work / name, *extra)
+        code, wall, metrics = run(scenario, common, work / name, *extra)
         late = metrics['late_commands'] if metrics else None
         messages, nbytes = per_agent_step(metrics) if metrics else (None, None)
         ok = code == 0 and late == 0
@@ -109,6 +118,10 @@ def largest(results) -> int:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--json', action='store_true', help='last line: JSON of all figures')
+    parser.add_argument('--params', type=Path, default=PARAMS,
+                        help="the agents' profile for every run (default: config/paper.yaml)")
+    parser.add_argument('--no-auth', action='store_true',
+                        help='run every swarm without message authentication')
     parser.add_argument('--sizes', type=int, nargs='*', default=[4, 8, 16, 24, 32],
                         help='swarm sizes to try as separate processes (ascending)')
     parser.add_argument('--composed', type=int, nargs='*', default=[16, 24, 32, 48, 64],
@@ -117,17 +130,26 @@ def main() -> int:
                         help='composed sizes to try without recorder and logger (ascending)')
     parser.add_argument('--rt-steps', type=int, default=20, help='real-time steps per size')
     args = parser.parse_args()
+    try:
+        load_params_file(args.params)
+    except (ParameterError, OSError) as error:
+        parser.error(f'--params: {error}')
+    args.params = args.params.resolve()
+    common = ['--params', str(args.params)] + (['--no-auth'] if args.no_auth else [])
+    print(f"profile: {args.params}, authentication {'off' if args.no_auth else 'on'}",
+          flush=True)
     with tempfile.TemporaryDirectory(prefix='sat_bench_swarm_') as tmp:
         work = Path(tmp)
-        code, wall, metrics = run(PAPER, work / 'paper')
+        code, wall, metrics = run(PAPER, common, work / 'paper')
         messages, nbytes = per_agent_step(metrics) if metrics else (None, None)
         print(f'paper scenario, lock-step, 200 steps incl. start-up: {wall:.1f} s '
               f'(target <= 30 s), exit {code}; {messages} msgs and {nbytes} B per agent per step',
               flush=True)
-        processes = real_time_sizes(args.sizes, False, args.rt_steps, work)
-        composed = real_time_sizes(args.composed, True, args.rt_steps, work)
-        bare = real_time_sizes(args.bare, True, args.rt_steps, work, observers=False)
-    summary = {'paper_lock_step_wall_s': round(wall, 1), 'paper_exit_code': code,
+        processes = real_time_sizes(args.sizes, False, args.rt_steps, common, work)
+        composed = real_time_sizes(args.composed, True, args.rt_steps, common, work)
+        bare = real_time_sizes(args.bare, True, args.rt_steps, common, work, observers=False)
+    summary = {'params': str(args.params), 'authentication': not args.no_auth,
+               'paper_lock_step_wall_s': round(wall, 1), 'paper_exit_code': code,
                'paper_msgs_per_agent_step': messages, 'paper_bytes_per_agent_step': nbytes,
                'largest_real_time_processes': largest(processes),
                'largest_real_time_composed': largest(composed),
