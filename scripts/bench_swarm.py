@@ -35,7 +35,6 @@ import time
 import numpy as np
 import yaml
 
-from sat_agent.config import load_params_file, ParameterError
 from sat_world_sim import bringup
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -118,7 +117,7 @@ def largest(results) -> int:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--json', action='store_true', help='last line: JSON of all figures')
-    parser.add_argument('--params', type=Path, default=PARAMS,
+    parser.add_argument('--params', type=bringup.profile_argument, default=PARAMS,
                         help="the agents' profile for every run (default: config/paper.yaml)")
     parser.add_argument('--no-auth', action='store_true',
                         help='run every swarm without message authentication')
@@ -130,11 +129,6 @@ def main() -> int:
                         help='composed sizes to try without recorder and logger (ascending)')
     parser.add_argument('--rt-steps', type=int, default=20, help='real-time steps per size')
     args = parser.parse_args()
-    try:
-        load_params_file(args.params)
-    except (ParameterError, OSError) as error:
-        parser.error(f'--params: {error}')
-    args.params = args.params.resolve()
     common = ['--params', str(args.params)] + (['--no-auth'] if args.no_auth else [])
     print(f"profile: {args.params}, authentication {'off' if args.no_auth else 'on'}",
           flush=True)

@@ -34,7 +34,7 @@ import time
 import numpy as np
 import yaml
 
-from sat_world_sim.bringup import executable, ros_env
+from sat_world_sim.bringup import executable, profile_argument, ros_env
 from sat_world_sim.domain_ids import claim_domain_id
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -206,7 +206,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--steps', type=int, default=5000)
     parser.add_argument('--agents', type=int, default=4)
-    parser.add_argument('--params', type=Path, default=ROOT / 'config' / 'paper.yaml',
+    parser.add_argument('--params', type=profile_argument, default=ROOT / 'config' / 'paper.yaml',
                         help="the agents' profile (default: config/paper.yaml)")
     parser.add_argument('--warm-up', type=float, default=0.1,
                         help='share of the steps after which the reference RSS is taken')
@@ -221,10 +221,6 @@ def main() -> int:
     args = parser.parse_args()
     if args.run_dir is not None and args.run_dir.exists():
         parser.error(f'--run-dir {args.run_dir} exists already')
-    if not args.params.is_file():
-        parser.error(f'--params {args.params}: no such file '
-                     '(a profile, e.g. config/persistent.yaml)')
-    args.params = args.params.resolve()
     # The watcher joins the run's private domain, localhost only, like the bring-up's children;
     # this process holds the claim (domain_ids) until it exits, after the swarm.
     domain = claim_domain_id()

@@ -1,11 +1,15 @@
-"""The environment the bring-up gives every process of a run."""
+"""The environment the bring-up gives every process of a run, and the scripts' profile check."""
 
+import argparse
 from pathlib import Path
 import xml.etree.ElementTree as ElementTree
 
-from sat_world_sim.bringup import ros_env
+import pytest
+
+from sat_world_sim.bringup import profile_argument, ros_env
 from sat_world_sim.domain_ids import POOL
 
+ROOT = Path(__file__).resolve().parents[1]
 FASTDDS = '{http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles}'
 
 
@@ -30,3 +34,15 @@ def test_a_profile_file_of_the_users_own_wins(monkeypatch, tmp_path):
     own = tmp_path / 'mine.xml'
     monkeypatch.setenv('FASTRTPS_DEFAULT_PROFILES_FILE', str(own))
     assert ros_env(3)['FASTRTPS_DEFAULT_PROFILES_FILE'] == str(own)
+
+
+def test_a_scripts_profile_argument_is_loaded_before_any_swarm_starts(tmp_path):
+    """The soak and bench_swarm scripts take --params through profile_argument."""
+    paper = ROOT / 'config' / 'paper.yaml'
+    assert profile_argument(str(paper)) == paper.resolve()
+    with pytest.raises(argparse.ArgumentTypeError, match='missing.yaml'):
+        profile_argument(str(tmp_path / 'missing.yaml'))
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text('/**:\n  ros__parameters:\n    phd:\n      n_particles: 5\n')
+    with pytest.raises(argparse.ArgumentTypeError, match=r'bad\.yaml: unknown parameter'):
+        profile_argument(str(bad))

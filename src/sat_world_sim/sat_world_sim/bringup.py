@@ -452,6 +452,19 @@ def run(processes: Sequence[Process], env: dict, run_dir: Path, timeout: float,
     return code
 
 
+def profile_argument(value: str) -> Path:
+    """Return the path of a script's --params (soak, bench_swarm) once the profile loads.
+
+    Checked before the script starts a swarm, whose nodes would refuse it only later.
+    """
+    path = Path(value).resolve()
+    try:
+        load_params_file(path)
+    except (ParameterError, OSError) as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
+    return path
+
+
 def load_run(options) -> List[Process]:
     """Check the parameter and scenario files and return the run's processes."""
     params = load_params_file(options.params)
