@@ -28,18 +28,20 @@ Clocks (parameter ``clock``):
   in lock-step) instead of in one burst with the next step's scans.
 
 An agent that stays silent for ``agent_timeout`` seconds (lock-step) is marked inactive: it holds
-position and is not waited for until it speaks again. Commands that are not one of the actions
-of Eqn. controlVectors or leave the area are refused with a log line; the agent holds. Every
-command and report is validated (the sender's namespace, the step, the content: the radio never
-forwards garbage); what is dropped is counted per reason on ``/diagnostics``.
+position and is not waited for until it answers a scan sent since (sat_world_sim.attendance).
+Commands that are not one of the actions of Eqn. controlVectors or leave the area are refused
+with a log line; the agent holds. Every command and report is validated (the sender's
+namespace, the step, the content: the radio never forwards garbage); what is dropped is counted
+per reason on ``/diagnostics``.
 Authentication (sat_agent.message_auth, sat_agent.ros.signed_io): with ``auth_key_file`` set,
 the world signs /world/step, /world/truth, /world/radio and every scan as sender 0, and takes
 each agent's cmd and radio/out raw, refusing (and counting) before deserialization and before
 the duplicate check what is too large (message_limits, also without a key), unsigned, badly
-signed, signed by anyone but that agent, replayed, or not of the current step (or the one
-before, to rejoin): a forged command cannot take an agent's place. The radio relays only for
-the roster, and seals each delivery for its receiver (Signer.seal: one short HMAC per
-delivery); only that seal makes a report acceptable on a radio/in topic.
+signed, signed by anyone but that agent, replayed, ahead of the current step or more than
+REJOIN_STEPS behind it (an inactive agent's late answer rejoins it): a forged command cannot
+take an agent's place. The radio relays only for the roster, and seals each delivery for its
+receiver (Signer.seal: one short HMAC per delivery); only that seal makes a report acceptable
+on a radio/in topic.
 Step 1 starts once the start-up handshake of sat_agent.ros.readiness says no first message can
 be lost (or after ``startup_timeout`` seconds, with a warning naming what is missing). When the
 run is over the node publishes a final WorldStep with ``finished`` (the agents exit on it) and
@@ -83,13 +85,15 @@ from sat_agent.topic_names import CLOCK, radio_topic, TRUTH_MARKERS
 from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet, RadioTraffic,
                           TargetTruth, WorldStep)
 
+from sat_world_sim.attendance import Attendance, REJOIN_STEPS
 from sat_world_sim.radio import Radio
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
 
 CLOCKS = {'lock_step': WorldStep.CLOCK_LOCK_STEP, 'real_time': WorldStep.CLOCK_REAL_TIME}
-# The world knows the step: agents' messages of this step, or of the one before (to rejoin).
-WINDOW = StepWindow(behind=1, ahead=0, world_ahead=0)
+# The world knows the step: agents' messages of this step, or older ones from an inactive agent
+# that rejoins with them (attendance.py); they are then dropped as stale.
+WINDOW = StepWindow(behind=REJOIN_STEPS, ahead=0, world_ahead=0)
 # Applied while world_sim runs (``ros2 param set``); the others are read-only here.
 LIVE = ('cooperation.comm_range', 'radio.loss', 'agent_timeout', 'view_rate')
 
@@ -125,7 +129,7 @@ class WorldSimNode(Node):
 
         self.world = World(scenario, self.params)
         self.ids = self.world.agent_ids
-        self.active = set(self.ids)
+        self.attendance = Attendance(self.ids)
         self.guard = InputGuard(self, 'world_sim', node.diagnostics_period)
         key = auth_key(self, node.auth_key_file)
         self.inputs = VerifiedInput(self, self.guard, key, self.ids, WINDOW)
@@ -221,7 +225,7 @@ class WorldSimNode(Node):
             return
         if self.clock == 'real_time':
             if now >= self._deadline:
-                late = sorted(self.active - set(self._cmds))
+                late = sorted(self.attendance.active - set(self._cmds))
                 if late:
                     self.late_commands += len(late)
                     self.get_logger().warning(
@@ -230,12 +234,12 @@ class WorldSimNode(Node):
                         throttle_duration_sec=LOG_THROTTLE_S)
                 self._finish_step()
         elif now >= self._deadline:
-            silent = sorted(i for i in self.active if not self._answered(i))
+            silent = sorted(i for i in self.attendance.active if not self._answered(i))
             self.get_logger().warning(
                 f'step {self.world.step}: agents {silent} silent for '
                 f'{self.settings.agent_timeout} s: '
                 'marked inactive, they hold position')
-            self.active -= set(silent)
+            self.attendance.let_go(silent, self.world.step)
             self._finish_step()
 
     def _start_when_ready(self, now: float):
@@ -251,8 +255,9 @@ class WorldSimNode(Node):
     def _final_messages_acked(self) -> bool:
         """Whether /clock, the world's topics, the active agents' scans and inboxes are acked."""
         publishers = [self.clock_pub, self.step_pub, self.truth_pub, self.traffic_pub]
-        publishers += [self.scan_pubs[i] for i in self.active]
-        publishers += [p for (i, _), p in self.inbox_pubs.items() if i in self.active]
+        active = self.attendance.active
+        publishers += [self.scan_pubs[i] for i in active]
+        publishers += [p for (i, _), p in self.inbox_pubs.items() if i in active]
         return all_acked(publishers)
 
     def _answered(self, agent_id: int) -> bool:
@@ -292,7 +297,8 @@ class WorldSimNode(Node):
             self._deadline = scheduled if scheduled > now else now + self.period
 
     def _maybe_finish(self):
-        if self.clock == 'lock_step' and self.active and all(map(self._answered, self.active)):
+        active = self.attendance.active
+        if self.clock == 'lock_step' and active and all(map(self._answered, active)):
             self._finish_step()
 
     def _finish_step(self):
@@ -325,12 +331,9 @@ class WorldSimNode(Node):
         if msg.step > self.world.step:
             self.guard.drop('future_step', f'{what} of step {msg.step} at {self.world.step}')
             return False
-        # An answer to the previous scan is enough to rejoin: the world does not wait for an
-        # inactive agent, so it is usually a step ahead by the time the agent answers, and
-        # requiring the current step would leave a restarted agent inactive for good.
-        if agent_id not in self.active and msg.step >= self.world.step - 1:
-            self.get_logger().info(f'agent {agent_id} speaks again: active')
-            self.active.add(agent_id)
+        if self.attendance.heard(agent_id, msg.step):
+            self.get_logger().info(f'agent {agent_id} speaks again (step {msg.step} at '
+                                   f'{self.world.step}): active')
         if msg.step < self.world.step:
             self.guard.drop('stale_step', f'{what} of step {msg.step} at {self.world.step}')
             return False
@@ -400,8 +403,8 @@ class WorldSimNode(Node):
         targets = [TargetTruth(id=int(i), alive=True, position=point(s[[0, 2]]),
                                velocity=Vector3(x=float(s[1]), y=float(s[3]), z=0.0))
                    for i, s in zip(truth.ids, truth.states)]
-        agents = [AgentTruth(id=i, position=point(poses[i]), active=i in self.active)
-                  for i in self.ids]
+        agents = [AgentTruth(id=i, position=point(poses[i]),
+                             active=i in self.attendance.active) for i in self.ids]
         return GroundTruth(header=header(k, self.dt), step=k, targets=targets, agents=agents,
                            searched_fraction=self.world.searched_fraction())
 
