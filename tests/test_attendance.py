@@ -5,7 +5,8 @@ from rclpy.serialization import serialize_message
 
 from sat_agent.message_auth import AuthError, MessageVerifier, Signer
 from sat_msgs.msg import ControlCommand
-from sat_world_sim.attendance import Attendance, REJOIN_STEPS
+from sat_world_sim.attendance import (Attendance, deadline_after_stall, REJOIN_STEPS,
+                                      WORLD_STALL_S)
 from sat_world_sim.ros.world_sim_node import WINDOW
 
 KEY = bytes(range(32))
@@ -48,6 +49,24 @@ def test_an_agent_slower_than_the_world_rejoins_with_its_first_answer(agent_step
                 rejoined_at = world
             began_on = world
     assert rejoined_at == 31 + agent_step
+
+
+def test_a_stalled_world_gives_the_agents_the_time_it_did_not_run():
+    # Ticks every 20 ms: the deadline stays; a world suspended for 10 s moves it by as much,
+    # less the WORLD_STALL_S a tick counts for.
+    assert deadline_after_stall(103.0, 100.0, 100.02) == 103.0
+    assert deadline_after_stall(103.0, 100.0, 100.0 + WORLD_STALL_S) == 103.0
+    assert deadline_after_stall(103.0, 100.0, 110.0) == pytest.approx(113.0 - WORLD_STALL_S)
+
+
+def test_a_world_starved_for_good_still_lets_a_silent_agent_go():
+    """Every tick a second late: each still counts WORLD_STALL_S, so the deadline comes."""
+    deadline, tick = 3.0, 0.0
+    while tick < deadline:
+        deadline = deadline_after_stall(deadline, tick, tick + 1.0)
+        tick += 1.0
+        assert tick < 100, 'the deadline never came'
+    assert tick == pytest.approx(3.0 / WORLD_STALL_S)
 
 
 def signed_cmd(step: int) -> bytes:

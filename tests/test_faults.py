@@ -67,6 +67,10 @@ def test_kill_and_respawn_under_radio_loss_completes_the_run(tmp_path):
     # away is the bring-up's respawn line and the new writer above: the world was held while
     # it was, so its absence need not cost a step (a fresh clone once saw none missing).
     assert set(metrics['steps'][-1]['modes']) == {'1', '2'}
+    # Held, the world did not take agent 1's answers from its queues: on waking it must not
+    # let agent 1 go for a silence that was its own (attendance.deadline_after_stall).
+    world_log = (run_dir / 'logs' / 'world_sim.log').read_text()
+    assert 'world_sim did not run for' in world_log and 'agents [1] silent' not in world_log
     assert (run_dir / 'bag' / 'metadata.yaml').is_file()
 
 

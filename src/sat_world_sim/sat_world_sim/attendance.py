@@ -11,6 +11,14 @@ the run. Here any answer to a scan sent since it was let go rejoins it; the worl
 its answer to the current scan again (the agent skips to the newest scan it holds), which puts
 it back in lock-step. Anything older is what it said before it went silent and rejoins nothing.
 
+The silence that lets an agent go is measured in the world's own running time: while
+world_sim does not run (suspended, or starved of CPU on a loaded machine) the agents' answers
+wait unread in its DDS queues, and on waking its timer can fire before they are read. So a tick
+counts for at most WORLD_STALL_S of the world's time: one later than that after the one before
+moves the step's deadline by the excess (deadline_after_stall). A world suspended early in a
+step then wakes with most of agent_timeout left to read the answers, and one starved for good
+still lets a silent agent go (each tick still counts WORLD_STALL_S), only later.
+
 How far back an answer may be is REJOIN_STEPS, world_sim's step window behind (message_auth):
 a rejoining agent's lag is far below it (a few steps in tests/test_faults.py's kill and
 respawn), and replays are refused by their counter, not by the window.
@@ -21,6 +29,13 @@ from typing import Dict, Iterable, Set
 
 # world_sim's step window behind: how old an agent's answer may be and still be heard (above).
 REJOIN_STEPS = 100
+# The most of the world's time one tick of world_sim's 20 ms timer counts for (above).
+WORLD_STALL_S = 0.25
+
+
+def deadline_after_stall(deadline: float, previous_tick: float, now: float) -> float:
+    """Return the step's deadline, moved by the gap since the last tick over WORLD_STALL_S."""
+    return deadline + max(0.0, now - previous_tick - WORLD_STALL_S)
 
 
 @dataclass

@@ -85,7 +85,7 @@ from sat_agent.topic_names import CLOCK, radio_topic, TRUTH_MARKERS
 from sat_msgs.msg import (AgentTruth, ControlCommand, GroundTruth, MeasurementSet, RadioTraffic,
                           TargetTruth, WorldStep)
 
-from sat_world_sim.attendance import Attendance, REJOIN_STEPS
+from sat_world_sim.attendance import Attendance, deadline_after_stall, REJOIN_STEPS
 from sat_world_sim.radio import Radio
 from sat_world_sim.scenario import load_scenario
 from sat_world_sim.world_model import World
@@ -142,6 +142,7 @@ class WorldSimNode(Node):
         self._cmds = {}
         self._reports = {i: set() for i in self.ids}
         self._deadline = None
+        self._last_tick = None
         self._started = False
         self._announcements = {}      # node name -> its last start-up announcement
         self._finished_at = None
@@ -233,7 +234,16 @@ class WorldSimNode(Node):
                         f'({self.late_commands} late so far): they hold position',
                         throttle_duration_sec=LOG_THROTTLE_S)
                 self._finish_step()
-        elif now >= self._deadline:
+            return
+        previous, self._last_tick = self._last_tick, now
+        deadline = deadline_after_stall(self._deadline, previous or now, now)
+        if deadline > self._deadline:
+            self.get_logger().warning(
+                f'step {self.world.step}: world_sim did not run for {now - previous:.1f} s '
+                '(suspended or starved of CPU): the silent agents get '
+                f'{deadline - self._deadline:.1f} s more', throttle_duration_sec=LOG_THROTTLE_S)
+            self._deadline = deadline
+        if now >= self._deadline:
             silent = sorted(i for i in self.attendance.active if not self._answered(i))
             self.get_logger().warning(
                 f'step {self.world.step}: agents {silent} silent for '
