@@ -77,7 +77,11 @@ def signed_cmd(step: int) -> bytes:
 def test_world_sims_window_reaches_back_as_far_as_a_rejoin_and_no_further():
     verifier = MessageVerifier(KEY, [1, 2], WINDOW)
     verifier.step = 500
-    assert verifier.verify('/agent_2/cmd', signed_cmd(500 - REJOIN_STEPS)).step == 400
+    old = signed_cmd(500 - REJOIN_STEPS)
+    assert verifier.verify('/agent_2/cmd', old).step == 500 - REJOIN_STEPS
+    # The window is wide; a copy of a genuine message is still refused, by its counter.
+    with pytest.raises(AuthError, match='replayed'):
+        verifier.verify('/agent_2/cmd', old)
     with pytest.raises(AuthError, match='out_of_window'):
         verifier.verify('/agent_2/cmd', signed_cmd(500 - REJOIN_STEPS - 1))
     with pytest.raises(AuthError, match='out_of_window'):
