@@ -70,7 +70,7 @@ def test_kill_and_respawn_under_radio_loss_completes_the_run(tmp_path):
     # Held, the world did not take agent 1's answers from its queues: on waking it must not
     # let agent 1 go for a silence that was its own (attendance.deadline_after_stall).
     world_log = (run_dir / 'logs' / 'world_sim.log').read_text()
-    assert 'world_sim did not run for' in world_log and 'agents [1] silent' not in world_log
+    assert 'world_sim did not tick for' in world_log and 'agents [1] silent' not in world_log
     assert (run_dir / 'bag' / 'metadata.yaml').is_file()
 
 

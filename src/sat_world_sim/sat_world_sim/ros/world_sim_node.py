@@ -239,8 +239,8 @@ class WorldSimNode(Node):
         deadline = deadline_after_stall(self._deadline, previous or now, now)
         if deadline > self._deadline:
             self.get_logger().warning(
-                f'step {self.world.step}: world_sim did not run for {now - previous:.1f} s '
-                '(suspended or starved of CPU): the silent agents get '
+                f'step {self.world.step}: world_sim did not tick for {now - previous:.1f} s '
+                '(suspended, starved of CPU or busy): the silent agents get '
                 f'{deadline - self._deadline:.1f} s more', throttle_duration_sec=LOG_THROTTLE_S)
             self._deadline = deadline
         if now >= self._deadline:
