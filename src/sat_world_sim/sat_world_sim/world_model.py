@@ -25,6 +25,7 @@ from sat_agent.config import SatParams
 from sat_agent.motion_model import POSITION, positions, propagate, VELOCITY
 from sat_agent.sensor_model import simulate_scan
 
+from sat_world_sim.radio import links_within
 from sat_world_sim.scenario import Scenario
 
 # Random targets get ids above every scripted id so both kinds can share one id space.
@@ -120,11 +121,8 @@ class World:
 
     def links(self) -> FrozenSet[Tuple[int, int]]:
         """Pairs (i, j), i < j, whose true positions are within C_R (the radio can carry)."""
-        ids = self.agent_ids
-        pts = np.array([self._poses[i] for i in ids])
-        gaps = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
-        rows, cols = np.nonzero(np.triu(gaps <= self.params.cooperation.comm_range, k=1))
-        return frozenset((ids[r], ids[c]) for r, c in zip(rows, cols))
+        return links_within({i: self._poses[i] for i in self.agent_ids},
+                            self.params.cooperation.comm_range)
 
     def apply_actions(self, actions: Mapping[int, int]) -> Dict[int, MoveResult]:
         """Move every agent by its action index; refused or missing actions leave it in place.
