@@ -220,12 +220,22 @@ def test_a_lone_agent_comes_back_over_the_target_it_left_and_keeps_it():
 
     Without revisits the fit drifts off within ~50 steps and the target is lost until a
     square happens to pass over it again; with them it is reported most of the run. Over
-    three seeds: a fit can be wrong from the start, and a revisit then finds nothing.
-    The fit of the estimates: a fit of measurements (additions.measurement_fit) stays on the
-    target, so no revisit comes before its report ends at p_S^t < phd.coast_survival and the
-    lone agent keeps the target 67 % of the run; a revisit at the report's end did not move
-    the swarm's figures (docs/persistent_trials.md, session 28) and was not kept.
+    twelve seeds, paired: a fit can be wrong from the start, and a revisit then finds nothing,
+    so a few seeds gain nothing or lose. The fit of the estimates: a fit of measurements
+    (additions.measurement_fit) stays on the target, so no revisit comes before its report
+    ends at p_S^t < phd.coast_survival and the lone agent keeps the target 67 % of the run; a
+    revisit at the report's end did not move the swarm's figures (docs/persistent_trials.md,
+    session 28) and was not kept.
+
+    Twelve seeds, not a few: a run is reproducible on one machine, but numpy picks its SIMD
+    kernels by CPU (AVX-512 or AVX2), their last bits differ and a 200-step run amplifies
+    that. Seeds 4-6 alone gave revisits +0.46 on an AVX2 machine and +0.20 on an AVX-512 one.
+    Over seeds 1-12 (session 70): with revisits 0.87 and 0.79, paired gain +0.35 and +0.24,
+    gains on 10 and 9 seeds (numpy limited to AVX2 by NPY_ENABLE_CPU_FEATURES, then not).
     """
-    on = np.mean([_tracked_share_of_a_lone_agent(True, seed) for seed in (4, 5, 6)])
-    off = np.mean([_tracked_share_of_a_lone_agent(False, seed) for seed in (4, 5, 6)])
-    assert on >= 0.8 and off <= on - 0.2
+    seeds = range(1, 13)
+    on = np.array([_tracked_share_of_a_lone_agent(True, seed) for seed in seeds])
+    off = np.array([_tracked_share_of_a_lone_agent(False, seed) for seed in seeds])
+    gain = on - off
+    assert on.mean() >= 0.7 and gain.mean() >= 0.15
+    assert np.sum(gain > 0) >= 2 * np.sum(gain < 0)
