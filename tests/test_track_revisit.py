@@ -229,7 +229,8 @@ def test_a_lone_agent_comes_back_over_the_target_it_left_and_keeps_it():
 
     Twelve seeds, not a few: a run is reproducible on one machine, but numpy picks its SIMD
     kernels by CPU (AVX-512 or AVX2), their last bits differ and a 200-step run amplifies
-    that. Seeds 4-6 alone gave revisits +0.46 on an AVX2 machine and +0.20 on an AVX-512 one.
+    that. Seeds 4-6 alone gave revisits +0.20 on an AVX-512 machine, +0.46 there with numpy
+    held to its AVX2 kernels.
     Over seeds 1-12 (session 70): with revisits 0.87 and 0.79, paired gain +0.35 and +0.24,
     gains on 10 and 9 seeds (numpy limited to AVX2 by NPY_ENABLE_CPU_FEATURES, then not).
     """
