@@ -10,11 +10,11 @@ import shutil
 from msg_samples import samples
 import pytest
 from rclpy.serialization import serialize_message
-from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.serde import SerdeError
 
 from sat_world_sim.bag_replay import deserialized, open_bag, outdated
 from sat_world_sim.bag_types import find_msg_dir, sat_typestore
+from sat_world_sim.bag_writer import RunBagWriter
 from sat_world_sim.ros.replay import live_connections, main
 
 DENSITY = ('/agent_1/radio/out/search_density', 'sat_msgs/msg/SearchDensity')
@@ -45,7 +45,7 @@ def old_bag(tmp_path):
     store = older_store(tmp_path)
     bag = tmp_path / 'bag'
     written = {}
-    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+    with RunBagWriter(bag) as writer:
         for stamp, (topic, typename) in enumerate((DENSITY, MODE), start=1):
             connection = writer.add_connection(topic, typename, typestore=store)
             msg = as_recorded(store, typename.rsplit('/', 1)[1])
@@ -97,7 +97,7 @@ def test_a_live_replay_leaves_out_what_was_recorded_with_another_definition(old_
 def test_a_bag_of_this_version_is_not_outdated(tmp_path):
     store = sat_typestore()
     bag = tmp_path / 'bag'
-    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+    with RunBagWriter(bag) as writer:
         for topic, typename in (DENSITY, MODE):
             writer.add_connection(topic, typename, typestore=store)
     with open_bag(bag) as reader:

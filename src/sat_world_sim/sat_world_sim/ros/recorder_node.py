@@ -27,7 +27,6 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, QosReliability,
                                 QosTime)
-from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
 from sat_agent.config import SatParams
 from sat_agent.node_params import ObserverParams
@@ -39,6 +38,7 @@ from sat_agent.topic_names import ROBOT_GOAL
 from sat_msgs.msg import GroundTruth, WorldStep
 
 from sat_world_sim.bag_types import sat_typestore
+from sat_world_sim.bag_writer import RunBagWriter
 from sat_world_sim.ros.observer import observer_input, signature_of
 from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics, Topic
@@ -73,10 +73,7 @@ class RecorderNode(Node):
             raise ValueError(f"parameter 'run_dir' = '{run_dir}': {self.path} exists already")
         self.path.parent.mkdir(parents=True, exist_ok=True)
         store = sat_typestore()
-        self.writer = Writer(self.path, version=9, storage_plugin=StoragePlugin.MCAP)
-        # Chunk compression, not rosbag2's file or message modes: the bag stays one plain MCAP
-        # that any MCAP reader and `ros2 bag play` open without a decompression step.
-        self.writer.set_compression(CompressionMode.STORAGE, CompressionFormat.ZSTD)
+        self.writer = RunBagWriter(self.path)
         self.writer.open()
         self.count = 0
         self._finished_at = None
