@@ -6,11 +6,12 @@ a decompression step.
 
 rosbags 0.11.9's ``Writer.write`` refuses a connection the bag does not hold by testing
 ``connection in self.connections``, a list: one scan of every connection for every message.
-A run has 15 topics per agent (965 at 64 agents), where that scan made a write 3 times slower
-(``scripts/bench_bag.py``: 10.5 against 3.5 us; the recorder spends ~160-190 us of CPU per
-message in a 64-agent real-time run, most of it in rclpy and the signature check), and it grows
-with the swarm. ``RunBagWriter`` keeps the same test (equality with a connection the bag
-holds), answered from a dict keyed by the connection's id.
+A run has 15 topics per agent (965 at 64 agents), where that scan made a write 2.7-3 times
+slower (``scripts/bench_bag.py``, session 71: 8.3-10.5 against 3.0-3.5 us; the recorder spends
+~160-190 us of CPU per message in a 64-agent real-time run, most of it taking the message
+through rclpy and the middleware), and it grows with the swarm. ``RunBagWriter`` keeps the
+same test (equality with a connection the bag holds), answered from a dict keyed by the
+connection's id.
 """
 
 from pathlib import Path
