@@ -121,6 +121,31 @@ def test_detectable_share_counts_targets_that_were_ever_in_a_square():
     assert summary['detectable_share'] == 0.5 and summary['detected_share'] == 0.0
 
 
+def test_an_estimate_near_a_target_no_square_has_held_is_a_false_track():
+    # Target 0 walks east at y = 50; agent 1's square (x in [45, 55]) first holds it at step
+    # 3. Agent 2, far away, reports a point 2 m from it at every step (a coasted report of
+    # something else): no detection and no tracked step before step 3, a false track instead.
+    records = [record(k, [[36.0 + 3 * k, 50.0]], {1: (50.0, 50.0), 2: (90.0, 90.0)},
+                      {1: [], 2: [[38.0 + 3 * k, 50.0]]}, {1: 'SEARCH', 2: 'TRACK'})
+               for k in (1, 2, 3, 4)]
+    metrics = compute_metrics(records, 'unit', 0)
+    (target,) = metrics['targets']
+    assert target['first_in_view'] == 3 and target['first_detected'] == 3
+    assert target['detection_delay'] == 0 and target['time_to_detection'] == 2
+    assert [s['n_tracked'] for s in metrics['steps']] == [0, 0, 1, 1]
+    assert [s['n_false'] for s in metrics['steps']] == [1, 1, 0, 0]
+    # The OSPA is the set distance either way: 2 m at every step.
+    assert [s['ospa'] for s in metrics['steps']] == pytest.approx([2.0] * 4)
+    # A target never in a square is never detected, however close a report passes.
+    never = compute_metrics([record(k, [[80.0, 20.0]], {1: (10.0, 10.0)},
+                                    {1: [[81.0, 20.0]]}, {1: 'TRACK'}) for k in (1, 2)],
+                            'unit', 0)
+    assert never['targets'][0]['first_detected'] is None
+    assert never['summary']['detected_share'] == 0.0
+    assert never['summary']['tracked_share'] == 0.0
+    assert never['summary']['false_track_steps'] == 2
+
+
 def test_two_agents_near_one_target_are_a_duplicate():
     records = [record(k, [[50.0, 50.0]], {1: (50, 50), 2: (52, 50)},
                       {1: [[50.0, 51.0]], 2: [[50.0, 49.0]] if k > 1 else []},

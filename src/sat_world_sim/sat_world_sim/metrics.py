@@ -15,11 +15,15 @@ Definitions (the paper leaves them open):
   estimate; both empty gives 0, so steps with nothing to find and nothing claimed score 0.
 - ``first_in_view``: first step the target's true position is inside some agent's sensing square.
 - Estimate of a target: each agent's estimates are assigned one-to-one to the true targets
-  (``ospa.gated_pairs``: ``linear_sum_assignment`` on the distances, pairs farther than
+  that some sensing square has held at or before the step (``seen_masks``;
+  ``ospa.gated_pairs``: ``linear_sum_assignment`` on the distances, pairs farther than
   ``detection_radius`` do not count), so an estimate of one target never also counts for a
-  second target next to it.
-- ``first_detected``: first step, at or after the target's birth, with some agent's estimate
-  assigned to the target.
+  second target next to it. A target no square has held yet cannot have been measured (p_D = 0
+  outside the square), so an estimate near it is about something else (a coasted report of
+  another target, clutter): it is a false track, not a detection or a tracked step (until
+  session 73 it counted as both; README, *Evaluation*, says what that moved).
+- ``first_detected``: first step, at or after the target's first view, with some agent's
+  estimate assigned to the target.
 - ``detection_delay`` = first_detected - first_in_view (None when either is None).
 - ``time_to_detection`` = first_detected - born, the search-and-track figure of merit; for a
   target never detected it is censored at the steps it was alive in the records (flagged by
@@ -27,7 +31,8 @@ Definitions (the paper leaves them open):
 - Tracked target at step k: some agent's estimate assigned to it (``n_tracked``); tracked by
   two or more agents at once: a duplicate (``n_duplicate``).
 - False track at step k: an agent's estimate assigned to no true target (``n_false``, summed
-  over agents); ``false_track_steps`` counts the steps with at least one.
+  over agents; an estimate near a target no square has held yet is one); ``false_track_steps``
+  counts the steps with at least one.
 - ``detectable_share``: the share of the run's targets whose true position was inside some
   agent's sensing square at some step (``first_in_view`` not None): the targets the search
   made detectable, whatever the detector made of them ("entered" in the tables and the trials'
@@ -38,7 +43,7 @@ Definitions (the paper leaves them open):
 
 from dataclasses import dataclass, field
 import json
-from typing import Dict, List, Mapping, Optional, Sequence
+from typing import Dict, List, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -117,8 +122,9 @@ def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
     node refused, per reason (unsigned, too_large, out_of_window, ...); empty in a clean run.
     """
     records = sorted(records, key=lambda r: r.step)
-    steps = [_step_metrics(r, config) for r in records]
-    targets = _target_metrics(records, config)
+    views = seen_masks(records, config)
+    steps = [_step_metrics(r, config, seen) for r, (_, seen) in zip(records, views)]
+    targets = _target_metrics(records, config, views)
     radio = _radio_metrics(records)
     return {
         'scenario': scenario,
@@ -143,11 +149,11 @@ def write_metrics(metrics: dict, path) -> None:
         stream.write('\n')
 
 
-def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
+def _step_metrics(record: StepRecord, config: MetricsConfig, seen: np.ndarray) -> dict:
     truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
     estimate = swarm_estimate(record.estimates, config.merge_distance)
     result = ospa(truth, estimate, config.cutoff, config.order)
-    per_target, false = trackers(truth, record.estimates, config.detection_radius)
+    per_target, false = trackers(truth, record.estimates, config.detection_radius, seen)
     modes = {str(a): str(record.modes[a]) for a in sorted(record.modes)}
     return {
         'step': int(record.step),
@@ -165,14 +171,14 @@ def _step_metrics(record: StepRecord, config: MetricsConfig) -> dict:
     }
 
 
-def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig) -> List[dict]:
+def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig,
+                    views: Sequence[Tuple[np.ndarray, np.ndarray]]) -> List[dict]:
     targets: Dict[int, dict] = {}
     last_step = records[-1].step if records else None
-    for record in records:
+    for record, (in_view, seen) in zip(records, views):
         ids = np.asarray(record.truth_ids, dtype=int).reshape(-1)
         truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
-        in_view = in_any_square(truth, record.agent_poses, config.sensor_side)
-        detected = trackers(truth, record.estimates, config.detection_radius)[0] > 0
+        detected = trackers(truth, record.estimates, config.detection_radius, seen)[0] > 0
         for row, target_id in enumerate(ids.tolist()):
             entry = targets.setdefault(target_id, {'id': target_id, 'born': record.step,
                                                    'died': None, 'first_in_view': None,
@@ -204,17 +210,47 @@ def in_any_square(points: np.ndarray, poses: Mapping[int, np.ndarray], side: flo
     return mask
 
 
-def trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float):
+@dataclass
+class SeenTargets:
+    """The targets some sensing square has held so far; ``step`` once per record, in step order."""
+
+    side: float
+    ids: set = field(default_factory=set)
+
+    def step(self, record: StepRecord) -> Tuple[np.ndarray, np.ndarray]:
+        """Return (in some square now, in some square at or before now) of the record's targets.
+
+        The second mask is which targets an estimate may be assigned to (module docstring).
+        """
+        ids = np.asarray(record.truth_ids, dtype=int).reshape(-1)
+        truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
+        in_view = in_any_square(truth, record.agent_poses, self.side)
+        self.ids.update(ids[in_view].tolist())
+        return in_view, np.isin(ids, list(self.ids))
+
+
+def seen_masks(records: Sequence[StepRecord], config: MetricsConfig
+               ) -> List[Tuple[np.ndarray, np.ndarray]]:
+    """``SeenTargets.step`` of every record, in step order."""
+    seen = SeenTargets(config.sensor_side)
+    return [seen.step(record) for record in records]
+
+
+def trackers(points: np.ndarray, estimates: Mapping[int, np.ndarray], radius: float,
+             eligible: np.ndarray):
     """Count per true point the agents with an estimate assigned to it, and the false estimates.
 
+    eligible: mask of the points an estimate may be assigned to (``SeenTargets``).
     Returns (counts per point, estimates of all agents assigned to no point); module docstring.
     """
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    rows = np.flatnonzero(eligible)
     counts = np.zeros(len(points), dtype=int)
     false = 0
     for estimate in estimates.values():
         found = np.asarray(estimate, dtype=float).reshape(-1, 2)
-        hits, _ = gated_pairs(points, found, radius)
-        counts[hits] += 1
+        hits, _ = gated_pairs(points[rows], found, radius)
+        counts[rows[hits]] += 1
         false += len(found) - len(hits)
     return counts, false
 

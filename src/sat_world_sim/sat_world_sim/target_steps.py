@@ -25,7 +25,7 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from sat_agent.beyond_paper.track_coasting import DROP_REASONS
-from sat_world_sim.metrics import in_any_square, MetricsConfig, StepRecord, trackers
+from sat_world_sim.metrics import MetricsConfig, SeenTargets, StepRecord, trackers
 from sat_world_sim.ospa_breakdown import note_followed_targets
 
 BEFORE = ('before detection, out of view', 'before detection, in view')
@@ -63,6 +63,10 @@ class TargetStepLedger:
     _followed: Dict[int, Tuple[object, Optional[int]]] = field(default_factory=dict)
     _dropped: Dict[int, str] = field(default_factory=dict)
     _found: set = field(default_factory=set)
+    _seen: SeenTargets = field(init=False)
+
+    def __post_init__(self):
+        self._seen = SeenTargets(self.config.sensor_side)
 
     def observe(self, swarm, record: StepRecord) -> None:
         """Count the step's target-steps (swarm: inprocess_swarm.InProcessSwarm after step())."""
@@ -79,8 +83,8 @@ class TargetStepLedger:
             live.update(id(track) for track in agent.coasting.tracks)
         self._followed = {key: value for key, value in self._followed.items() if key in live}
         held = {target for _, target in self._followed.values()}
-        tracked = trackers(truth, record.estimates, self.config.detection_radius)[0] > 0
-        in_view = in_any_square(truth, record.agent_poses, self.config.sensor_side)
+        in_view, seen = self._seen.step(record)
+        tracked = trackers(truth, record.estimates, self.config.detection_radius, seen)[0] > 0
         for row, target in enumerate(ids):
             self.counts[category(target in self._found, bool(tracked[row]), bool(in_view[row]),
                                  target in held, self._dropped.get(target))] += 1
