@@ -132,6 +132,17 @@ def test_a_peaks_covariance_holds_its_kernel():
     assert np.linalg.det(estimate_position_covariances([np.zeros((4, 4))], 0.0)[0]) > 0
 
 
+def test_an_estimate_weighs_with_a_kernel_only_when_the_filter_has_kernels():
+    """additions.kernel_likelihood off: the peak's particles are points, no bandwidth added."""
+    pose, point = np.array([10.0, 10.0]), np.array([30.0, 30.0])   # out of view: no scan
+    estimate = [TargetEstimate(point, VELOCITY, np.eye(4) * 0.25, 1.0)]
+    for kernels, bandwidth in ((True, SENSOR.likelihood_bandwidth), (False, 0.0)):
+        coasting = TrackCoasting(PARAMS.with_overrides({'additions.kernel_likelihood': kernels}))
+        coasting.update(1, pose, estimate, NONE, NONE, np.zeros((0, 2)))
+        np.testing.assert_allclose(coasting.tracks[0].informations[0], np.linalg.inv(
+            estimate_position_covariances([np.eye(4) * 0.25], bandwidth)[0]))
+
+
 def _track_steps(measurement_fit, steps, seed=5):
     """Feed a track estimates erring 1 m and the tracker's measurements; return fresh counts."""
     params = PARAMS.with_overrides({'additions.measurement_fit': measurement_fit})

@@ -40,9 +40,12 @@ the senders of the inbox's reports that were in SEARCH at k-1. Since radio range
 two agents in range see each other's k-1 report at the same step and so see the same events: an
 agent joining S_k, the set of agents in SEARCH by the k-1 reports (first contact, meeting again,
 a return to SEARCH), or a member leaving SEARCH; both replan jointly at that step and compute
-identical node partitions independently. Replans that only one agent makes (own walk exhausted,
-own return to SEARCH) are made alone from its current state; leaving radio range does not
-replan (the members keep their walks of the joint plan, as in the paper).
+identical node partitions independently. Per pair, not per group: when A and B come into range
+while both are already in range of C, A and B plan jointly over {A, B, C} and C, which sees no
+new member, keeps its walk until its next replan of its own (with persistent planning within
+``search.replan_period`` steps; session 73's review). Replans that only one agent makes (own
+walk exhausted, own return to SEARCH) are made alone from its current state; leaving radio
+range does not replan (the members keep their walks of the joint plan, as in the paper).
 
 The components that implement additions to the paper are chosen once, here and in the
 components' constructors, from ``params.additions`` (beyond_paper/__init__.py lists them);
@@ -409,8 +412,9 @@ class Agent:
         """Mark visited nodes and replan when needed (module docstring).
 
         SearchPlanner's rules, plus one that keeps joint plans shared: a joint replan whenever
-        an agent joins S_k (first contact, or back to SEARCH), an event every member of the
-        group sees at the same step, whatever its own plan's group is.
+        an agent joins S_k (first contact, or back to SEARCH), an event both agents of the pair
+        see at the same step (a third member in range of both does not: module docstring),
+        unless the planner already replans alone.
         """
         own_values = self.search_map_values(self.filter.search.values)
         self.planner.mark_visited(pose, own_values)

@@ -74,6 +74,7 @@ import numpy as np
 
 from sat_agent.actions import fold, inside_area
 from sat_agent.beyond_paper.coast_report import report_threshold
+from sat_agent.beyond_paper.kernel_likelihood import filter_bandwidth
 from sat_agent.beyond_paper.measurement_fit import (
     associate, estimate_position_covariances, measurement_positions, WalkFit,
     weighted_walk_fit)
@@ -369,8 +370,9 @@ class TrackCoasting:
         params = self.params
         if not params.additions.measurement_fit:
             return positions, None
+        # The particles are kernels only with additions.kernel_likelihood (filter_bandwidth).
         covariances = estimate_position_covariances(
-            [t.covariance for t in estimates], params.sensor.likelihood_bandwidth)
+            [t.covariance for t in estimates], filter_bandwidth(params))
         scanned, scanned_informations = measurement_positions(measurements, pose,
                                                               params.sensor)
         # Only the square holds detections (Eqn. sensing_model's p_D); a false alarm far out

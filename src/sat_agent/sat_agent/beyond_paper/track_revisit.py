@@ -25,7 +25,7 @@ walk's next node by at most ``cooperation.revisit_detour``. It flies on the sear
 keeps the fit's next position in its next square once it can
 (investigation.keep_in_view_action). The scan over it continues the track (track continuity:
 the coasted position is an expected target of the extraction), so P_lost falls and the walk
-resumes; a target that is not there is dropped after ``phd.coast_misses`` looks.
+resumes; a target that is not there is dropped after more than ``phd.coast_misses`` looks.
 With ``cooperation.revisit_death`` below 1 (session 43) a target is also due once the chance
 that it died since its last estimate, 1 - p_S^t at the meeting step, reaches it, and due
 targets are ranked by p_S^t P_lost + 1 - p_S^t per metre, the chance that the report is wrong
