@@ -5,10 +5,12 @@ process (hostile.py) at the steps it sees agent 1's scans: a command hijack (uns
 a wrong key, and replays of agent 1's genuine commands), a step jump (scans of step k + 999),
 phantom scans (ten forged detections near a fake target, from a wrong key), agent 2's genuine
 reports published straight on agent 1's inbox, an unknown agent 99 (without the key, and as
-an insider with a valid world seal), and replays of a genuine /world/step and of a genuine
-delivery. Every attack must fail and be counted under its reason by the node it targets
-(/diagnostics, metrics.json's ``dropped``), and the run must be the unattacked one: its
-metrics equal the in-process swarm's for the same scenario and seed.
+an insider with a valid world seal), replays of a genuine /world/step and of a genuine
+delivery, and malformed start-up announcements on the unsigned /world/ready (JSON nested past
+the parser's recursion limit, ill-typed, oversized), which ended world_sim before session 73.
+Every attack must fail and be counted under its reason by the node it targets (/diagnostics,
+metrics.json's ``dropped``), and the run must be the unattacked one: its metrics equal the
+in-process swarm's for the same scenario and seed.
 """
 
 from collections import Counter
@@ -17,12 +19,14 @@ from geometry_msgs.msg import Point
 from hostile import (attack_setup, Diagnostics, forge, Hostile, LATCHED,
                      read_metrics, RELIABLE, run_attacked)
 import pytest
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from ros_harness import ros_node
+from std_msgs.msg import String
 from test_swarm_ros import inprocess_metrics
 
 from sat_agent.message_auth import (AuthError, MessageVerifier, Signer, StepWindow,
                                     WORLD_SENDER)
+from sat_agent.ros import readiness
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import AgentMode, ControlCommand, MeasurementSet, RangeBearing, WorldStep
 
@@ -81,6 +85,12 @@ def attack(hostile, sent, k, key):
         signed = forge(mode, radio_topic(99, 'out', 'mode'), k, 99, key, relayed=True)
         hostile.send(inbox, AgentMode, Signer(key, WORLD_SENDER).seal(inbox, signed, k))
         sent[(AGENT_1, 'unknown_sender')] += 1
+    if k == 9:
+        for text in ('[' * 1000, '{"node": "/x", "reads": [["/t"]], "writes": {}}',
+                     ' ' * (readiness.MAX_ANNOUNCEMENT_BYTES + 1)):
+            hostile.send(readiness.TOPIC, String, serialize_message(String(data=text)),
+                         readiness.QOS)
+            sent[(WORLD, 'bad_announcement')] += 1
     if k == 10:
         old_step = hostile.captured['/world/step'][1]
         hostile.send('/world/step', WorldStep, old_step, LATCHED)
@@ -113,7 +123,8 @@ def attacked(tmp_path_factory):
         targets = [('/agent_1/cmd', ControlCommand, RELIABLE),
                    ('/agent_1/measurements', MeasurementSet, RELIABLE),
                    (radio_topic(1, 'in', 'mode'), AgentMode, RELIABLE),
-                   ('/world/step', WorldStep, LATCHED)]
+                   ('/world/step', WorldStep, LATCHED),
+                   (readiness.TOPIC, String, readiness.QOS)]
         codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch,
                              diagnostics, (WORLD, AGENT_1, '/agent_2/agent'))
     assert codes == dict.fromkeys(codes, 0), codes

@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+from geometry_msgs.msg import Point
 import numpy as np
 import pytest
 from rclpy.serialization import serialize_message
@@ -10,9 +11,11 @@ from sat_agent.agent_core import Agent, REPORT_KINDS
 from sat_agent.config import load_params_file, SatParams
 from sat_agent.message_auth import (BLOCK_BYTES, MonotonicCounter, Signer, StepWindow,
                                     WORLD_SENDER)
-from sat_agent.ros.msg_conversions import InvalidMessage, report_part_from_msg, report_to_msgs
+from sat_agent.ros.msg_conversions import (check_status, InvalidMessage, report_part_from_msg,
+                                           report_to_msgs)
 from sat_agent.ros.radio_parsing import RadioParser
 from sat_agent.ros.signed_io import VerifiedInput
+from sat_msgs.msg import AgentStatus
 
 PARAMS = SatParams()
 CONFIG = Path(__file__).resolve().parent.parent / 'config'
@@ -140,3 +143,28 @@ def test_an_insiders_report_refused_for_its_content_does_not_block_the_genuine_o
     assert inputs.receive_report(parser, 'search_density', channel, genuine, lattice, limit,
                                  relayed=True) is None
     assert guard.reasons == ['replayed']
+
+
+def test_a_status_refused_for_its_content_does_not_block_the_genuine_one():
+    # An insider's status for an observer (metrics, logger) with a NaN position, signed by agent
+    # 1 with the counter just above the genuine one's and arriving first. NaN points used to
+    # end the metrics node in its OSPA; refused before it is taken, it must leave the counter.
+    key, channel = bytes(range(32)), '/agent_1/status'
+    genuine = AgentStatus(agent_id=1, step=3, particle_xy=[1.0, 2.0], particle_weights=[0.5])
+    bombs = [AgentStatus(agent_id=1, step=3, position=Point(x=float('nan'))),
+             AgentStatus(agent_id=1, step=3, particle_xy=[1.0, 2.0, 3.0]),
+             AgentStatus(agent_id=1, step=3, mode=7)]
+
+    def signed(counter, msg):
+        return Signer(key, 1, MonotonicCounter(lambda: counter)).sign(
+            channel, serialize_message(msg), 3)
+    guard = Guard()
+    inputs = VerifiedInput(None, guard, key, (1, 2), StepWindow(behind=4, ahead=1, world_ahead=10))
+    inputs.verifier.step = 3
+    for bomb in bombs:
+        assert inputs.receive(channel, signed(101, bomb), AgentStatus, 1 << 20, sender=1,
+                              content=check_status) is None
+    assert guard.reasons == ['non_finite', 'bad_layout', 'unknown_mode']
+    taken = inputs.receive(channel, signed(100, genuine), AgentStatus, 1 << 20, sender=1,
+                           content=check_status)
+    assert taken is not None and list(taken.particle_xy) == [1.0, 2.0]

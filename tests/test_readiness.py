@@ -2,7 +2,10 @@
 
 import json
 
-from sat_agent.ros.readiness import announcement, unmet
+import pytest
+
+from sat_agent.ros.readiness import (
+    announcement, AnnouncementError, MAX_ANNOUNCEMENT_BYTES, parse, unmet)
 
 WORLD_READS = ['/agent_1/cmd', '/agent_1/radio/out/mode']
 WORLD_WRITES = {'/agent_1/measurements': 2, '/world/step': 1}
@@ -70,3 +73,27 @@ def test_a_node_that_says_observer_is_one_even_when_it_writes_an_agents_commands
         '/hostile writes /agent_1/cmd to 1 of 2 readers']
     # Without the flag the same announcement speaks for agent 1, as a scripted agent's does.
     assert 'observer' not in json.loads(announcement('/scripted', [], {'/agent_1/cmd': 1}))
+
+
+def test_an_announcement_parses_back_to_what_was_announced():
+    text = announcement('/metrics', ['/world/step'], {'/metrics/ready': 2}, observer=True)
+    assert parse(text) == json.loads(text)
+    assert parse(announcement('/agent_1/agent', [], {}))['writes'] == {}
+
+
+@pytest.mark.parametrize('text', [
+    '[' * 1000,                                        # nests past the JSON parser's recursion
+    '{"node": "/x", "reads": [' + '"/t",' * (MAX_ANNOUNCEMENT_BYTES // 5) + '"/t"], "writes": {}}',
+    'null', '[]', '"node"', '{"node": 1, "reads": [], "writes": {}}',
+    '{"node": "/x", "writes": {}}',
+    '{"node": "/x", "reads": [["/t"]], "writes": {}}',  # unhashable: unmet() raised TypeError
+    '{"node": "/x", "reads": [], "writes": {"/t": "many"}}',
+    '{"node": "/x", "reads": [], "writes": {"/t": -1}}',
+    '{"node": "/x", "reads": [], "writes": {"/t": true}}',
+    '{"node": "/x", "reads": [], "writes": {"/t": 1.5}}',
+    '{"node": "/x", "reads": [], "writes": [], "observer": true}',
+    '{"node": "/x", "reads": [], "writes": {}, "observer": "yes"}',
+])
+def test_a_malformed_announcement_is_refused_with_its_reason(text):
+    with pytest.raises(AnnouncementError):
+        parse(text)

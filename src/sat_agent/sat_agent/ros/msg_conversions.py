@@ -197,6 +197,26 @@ def mode_from_msg(msg: AgentMode) -> Mode:
         raise InvalidMessage('unknown_mode', f'mode {msg.mode}') from None
 
 
+# -- status (observers) ----------------------------------------------------------------------
+
+def check_status(msg) -> None:
+    """Raise InvalidMessage unless an AgentStatus holds what the observers draw and score.
+
+    Signed statuses come from agents, but a key holder can sign anything: NaN points used to end
+    the metrics node in the OSPA and odd particle arrays the logger in a reshape (session 73).
+    """
+    _finite('non_finite', [xy(msg.position)] + [xy(p) for p in msg.plan]
+            + [xy(p) for p in msg.coasted], 'position, plan or coasted point')
+    mode_from_msg(msg)
+    estimate_from_msg(msg.estimate)
+    _finite('non_finite', np.concatenate([
+        np.asarray(msg.particle_xy, dtype=float), np.asarray(msg.particle_weights, dtype=float),
+        [msg.compute_time]]), 'particles or compute time')
+    if len(msg.particle_xy) != 2 * len(msg.particle_weights):
+        raise InvalidMessage('bad_layout', f'{len(msg.particle_xy)} particle coordinates for '
+                                           f'{len(msg.particle_weights)} weights')
+
+
 # -- whole reports --------------------------------------------------------------------------
 
 def report_to_msgs(report: AgentReport, lattice: Lattice, dt: float):

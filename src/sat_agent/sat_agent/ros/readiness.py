@@ -23,6 +23,11 @@ as the announced nodes (and world_sim itself) that read its topic: ``unmet`` say
 still missing.
 A reader that is not announced (``ros2 topic echo``) is not waited for; one that is counted in
 its place would let a writer pass with one announced reader unmatched.
+The topic is not signed (its readers start before any key could be checked), so world_sim takes
+an announcement only through ``parse``: bounded in size, JSON of exactly that shape (a deep or
+ill-typed one used to escape the callback and end world_sim, session 73); it keeps at most
+EXTRA_ANNOUNCERS nodes besides the agents and observers, and none after the start (each
+malformed one is counted as ``bad_announcement``, before or after).
 """
 
 import json
@@ -39,6 +44,42 @@ TOPIC = '/world/ready'
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                  durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CHECK_PERIOD_S = 0.1
+# An 80-agent recorder announces ~1,200 topics of ~40 characters (~50 KiB): room for more.
+MAX_ANNOUNCEMENT_BYTES = 256 * 1024
+# Nodes kept besides the agents and the observers world_sim waits for (a test's scripted nodes,
+# several nodes of one process); the rest are dropped, so forged names cannot fill memory.
+EXTRA_ANNOUNCERS = 64
+
+
+class AnnouncementError(ValueError):
+    """An announcement that is not the JSON of ``announcement`` (the message says why)."""
+
+
+def parse(text: str) -> dict:
+    """Return the announcement in text, checked to have the shape ``announcement`` writes.
+
+    Raises AnnouncementError for text over MAX_ANNOUNCEMENT_BYTES, text that is not JSON (or
+    nests too deep for the parser), or JSON of another shape: ``node`` a string, ``reads`` a list
+    of strings, ``writes`` a mapping of strings to counts >= 0, ``observer`` (optional) a bool.
+    """
+    if len(text) > MAX_ANNOUNCEMENT_BYTES:
+        raise AnnouncementError(f'{len(text)} characters, more than {MAX_ANNOUNCEMENT_BYTES}')
+    try:
+        announced = json.loads(text)
+    except (ValueError, RecursionError) as error:
+        raise AnnouncementError(f'not JSON: {type(error).__name__}') from None
+    if not isinstance(announced, dict) or not isinstance(announced.get('node'), str):
+        raise AnnouncementError('not a mapping with a string "node"')
+    reads, writes = announced.get('reads'), announced.get('writes')
+    if not isinstance(reads, list) or not all(isinstance(topic, str) for topic in reads):
+        raise AnnouncementError('"reads" is not a list of topic names')
+    if not isinstance(writes, dict) or not all(
+            isinstance(count, int) and not isinstance(count, bool) and count >= 0
+            for count in writes.values()):
+        raise AnnouncementError('"writes" is not a mapping of topic names to counts')
+    if not isinstance(announced.get('observer', False), bool):
+        raise AnnouncementError('"observer" is not true or false')
+    return announced
 
 
 def announcement(node_name: str, reads: Iterable[str], writes: Mapping[str, int],

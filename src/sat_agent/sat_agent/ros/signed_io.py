@@ -81,27 +81,30 @@ class VerifiedInput:
 
     def subscribe(self, msg_type, topic: str, callback: Callable, qos, max_bytes: int,
                   sender: Optional[int] = None, relayed: bool = False,
-                  origin: Optional[Callable[[int], str]] = None, names_sender: bool = True):
+                  origin: Optional[Callable[[int], str]] = None, names_sender: bool = True,
+                  content: Optional[Callable] = None):
         """Subscribe raw to topic; callback(msg) gets the messages that pass (class docstring).
 
         sender: the only id allowed to sign on this topic (None: any on the roster); relayed:
         the type carries a relay seal after the sender's block (not checked); origin: the topic
         is an inbox of the relay, origin(sender) the topic the sender published on (the seal
         and the sender's block are checked); names_sender: the message's ``agent_id`` is its
-        sender's (not so in a scan, where it names the receiver).
+        sender's (not so in a scan, where it names the receiver); content(msg): raises
+        msg_conversions.InvalidMessage for a message the node cannot use (bad content).
         """
         channel = self.node.resolve_topic_name(topic)
 
         def on_data(data: bytes):
             msg = self.receive(channel, data, msg_type, max_bytes, sender, relayed, origin,
-                               names_sender)
+                               names_sender, content)
             if msg is not None:
                 callback(msg)
         return self.node.create_subscription(msg_type, topic, on_data, qos, raw=True)
 
     def receive(self, channel: str, data: bytes, msg_type, max_bytes: int,
                 sender: Optional[int] = None, relayed: bool = False,
-                origin: Optional[Callable[[int], str]] = None, names_sender: bool = True):
+                origin: Optional[Callable[[int], str]] = None, names_sender: bool = True,
+                content: Optional[Callable] = None):
         """Return the message of data if it passes every check, else None (counted)."""
         signed = self.check(channel, data, max_bytes, sender, relayed, origin, commit=False)
         if signed is False:
@@ -113,6 +116,12 @@ class VerifiedInput:
             return None
         if not self.confirm(channel, signed, msg, names_sender):
             return None
+        if content is not None:
+            try:
+                content(msg)
+            except InvalidMessage as error:
+                self.guard.drop(error.reason, f'{channel}: {error.detail}')
+                return None
         self.verifier.commit(channel)
         return msg
 

@@ -10,7 +10,8 @@ run's first messages.
 **Input.** Observers take every signed topic raw through signed_io.VerifiedInput, as the
 agents do: the size limit of message_limits before anything else, the signature (or, with
 authentication off, the step window on the message's own step), deserialization in a try, a
-search density's grid checked against the lattice before it is decoded. A message refused on
+search density's grid checked against the lattice before it is decoded, a status's points and
+particle arrays checked before they are scored or drawn. A message refused on
 the way is counted per reason on /diagnostics (and in metrics.json's ``dropped``), so no
 message can crash an observer, hang it (a truth of step 2^32-1) or make it keep more than the
 window's worth of steps (far-future statuses).
@@ -23,7 +24,7 @@ from sat_agent.agent_core import REPORT_KINDS
 from sat_agent.message_auth import StepWindow, WORLD_SENDER
 from sat_agent.ros.input_guard import InputGuard
 from sat_agent.ros.message_limits import MessageLimits
-from sat_agent.ros.msg_conversions import check_grid, InvalidMessage
+from sat_agent.ros.msg_conversions import check_grid, check_status
 from sat_agent.ros.qos import DEPTH, RADIO, STEP, WORLD
 from sat_agent.ros.readiness import ReadyAnnouncer
 from sat_agent.ros.signed_io import auth_key, VerifiedInput
@@ -100,21 +101,13 @@ def watch_run(node, params, run, add) -> Watch:
     inputs, limits = observer_input(node, params, run)
     lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
 
-    def add_density(topic, msg):
-        try:
-            check_grid(msg.grid, lattice)
-        except InvalidMessage as error:
-            inputs.guard.drop(error.reason, f'{topic}: {error.detail}')
-            return
-        add(topic, msg)
-
-    topics = [('/world/step', WorldStep, WORLD, add), ('/world/truth', GroundTruth, WORLD, add),
-              ('/world/radio', RadioTraffic, WORLD, add)]
+    topics = [('/world/step', WorldStep, WORLD, None), ('/world/truth', GroundTruth, WORLD, None),
+              ('/world/radio', RadioTraffic, WORLD, None)]
     for i in run.agent_ids:
-        topics += [(f'/agent_{i}/status', AgentStatus, STEP, add),
-                   (radio_topic(i, 'out', 'search_density'), SearchDensity, RADIO, add_density)]
-    subscriptions = [inputs.subscribe(cls, topic,
-                                      lambda msg, topic=topic, take=take: take(topic, msg),
-                                      qos, **signature_of(topic, limits))
-                     for topic, cls, qos, take in topics]
+        topics += [(f'/agent_{i}/status', AgentStatus, STEP, check_status),
+                   (radio_topic(i, 'out', 'search_density'), SearchDensity, RADIO,
+                    lambda msg: check_grid(msg.grid, lattice))]
+    subscriptions = [inputs.subscribe(cls, topic, lambda msg, topic=topic: add(topic, msg), qos,
+                                      content=content, **signature_of(topic, limits))
+                     for topic, cls, qos, content in topics]
     return Watch(inputs, ReadyAnnouncer(node, subscriptions))

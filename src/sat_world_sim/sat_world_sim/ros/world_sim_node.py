@@ -51,7 +51,6 @@ ROS clock only moves when it steps.
 """
 
 from collections import Counter
-import json
 from pathlib import Path
 import time
 
@@ -185,16 +184,24 @@ class WorldSimNode(Node):
     # -- start-up ---------------------------------------------------------------------------
 
     def on_announcement(self, msg: String):
-        """Keep each node's last start-up announcement (sat_agent.ros.readiness)."""
+        """Keep each node's last start-up announcement (sat_agent.ros.readiness).
+
+        Every one is checked (a malformed one is counted); they are kept only until the run
+        starts, and for at most the agents, the observers and readiness.EXTRA_ANNOUNCERS nodes.
+        """
         try:
-            announced = json.loads(msg.data)
-            name, reads, writes = announced['node'], announced['reads'], announced['writes']
-            if not isinstance(reads, list) or not isinstance(writes, dict):
-                raise TypeError('reads must be a list and writes a mapping')
-        except (ValueError, KeyError, TypeError) as error:
+            announced = readiness.parse(msg.data)
+        except readiness.AnnouncementError as error:
             self.guard.drop('bad_announcement', f'{readiness.TOPIC}: {error}')
             return
-        self._announcements[str(name)] = announced
+        if self._started:
+            return
+        name = announced['node']
+        room = len(self.ids) + self.observers + readiness.EXTRA_ANNOUNCERS
+        if name not in self._announcements and len(self._announcements) >= room:
+            self.guard.drop('too_many_announcers', f'{readiness.TOPIC}: {name} past {room} nodes')
+            return
+        self._announcements[name] = announced
 
     def _unmet(self):
         """Return what keeps step 1 from starting (sat_agent.ros.readiness).
