@@ -123,8 +123,12 @@ def compute_metrics(records: Sequence[StepRecord], scenario: str, seed: int,
     """
     records = sorted(records, key=lambda r: r.step)
     views = seen_masks(records, config)
-    steps = [_step_metrics(r, config, seen) for r, (_, seen) in zip(records, views)]
-    targets = _target_metrics(records, config, views)
+    # Per record: (agents' estimates assigned to each true target, estimates assigned to none).
+    assigned = [trackers(r.truth_positions, r.estimates, config.detection_radius, seen)
+                for r, (_, seen) in zip(records, views)]
+    steps = [_step_metrics(r, config, *a) for r, a in zip(records, assigned)]
+    targets = _target_metrics(records, [in_view for in_view, _ in views],
+                              [per_target > 0 for per_target, _ in assigned])
     radio = _radio_metrics(records)
     return {
         'scenario': scenario,
@@ -149,11 +153,11 @@ def write_metrics(metrics: dict, path) -> None:
         stream.write('\n')
 
 
-def _step_metrics(record: StepRecord, config: MetricsConfig, seen: np.ndarray) -> dict:
+def _step_metrics(record: StepRecord, config: MetricsConfig, per_target: np.ndarray,
+                  false: int) -> dict:
     truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
     estimate = swarm_estimate(record.estimates, config.merge_distance)
     result = ospa(truth, estimate, config.cutoff, config.order)
-    per_target, false = trackers(truth, record.estimates, config.detection_radius, seen)
     modes = {str(a): str(record.modes[a]) for a in sorted(record.modes)}
     return {
         'step': int(record.step),
@@ -171,14 +175,17 @@ def _step_metrics(record: StepRecord, config: MetricsConfig, seen: np.ndarray) -
     }
 
 
-def _target_metrics(records: Sequence[StepRecord], config: MetricsConfig,
-                    views: Sequence[Tuple[np.ndarray, np.ndarray]]) -> List[dict]:
+def _target_metrics(records: Sequence[StepRecord], in_views: Sequence[np.ndarray],
+                    detections: Sequence[np.ndarray]) -> List[dict]:
+    """Per target: birth, death, first view and first detection (module docstring).
+
+    in_views, detections: per record, which of its targets are in a square and have an
+    estimate assigned.
+    """
     targets: Dict[int, dict] = {}
     last_step = records[-1].step if records else None
-    for record, (in_view, seen) in zip(records, views):
+    for record, in_view, detected in zip(records, in_views, detections):
         ids = np.asarray(record.truth_ids, dtype=int).reshape(-1)
-        truth = np.asarray(record.truth_positions, dtype=float).reshape(-1, 2)
-        detected = trackers(truth, record.estimates, config.detection_radius, seen)[0] > 0
         for row, target_id in enumerate(ids.tolist()):
             entry = targets.setdefault(target_id, {'id': target_id, 'born': record.step,
                                                    'died': None, 'first_in_view': None,
