@@ -3,7 +3,8 @@
 ``ros2 param set`` of a read-only parameter is refused by rclpy; of a live one with a bad value,
 refused with the schema's reason (the parameter, the value, what is allowed); of a live one with
 a good value, applied: ``get`` shows it and the node behaves by it (world_sim's radio links,
-an agent's views).
+an agent's views). A node started without ``live_parameters:=true`` refuses every change: its
+live parameters are read-only too.
 ``ros2 param describe`` shows each parameter's description, range and read-only flag.
 """
 
@@ -18,7 +19,7 @@ from ros_harness import (executable, PARAMS, ros_node, scaled, spin_until, start
                          wait_matched, write_scenario)
 
 from sat_agent.config import SatParams
-from sat_agent.node_params import AgentNodeParams
+from sat_agent.node_params import AgentNodeParams, LIVE_SWITCH
 from sat_agent.parameter_schema import leaves
 from sat_agent.ros.qos import WORLD
 from sat_agent.topic_names import VIEW_PREFIX
@@ -79,7 +80,7 @@ def get_one(node, client, name):
 @pytest.mark.timeout(180)
 def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_path):
     command = [executable('sat_agent', 'agent'), '--ros-args', '-r', '__ns:=/agent_1',
-               '--params-file', str(PARAMS), '-p', 'agent_id:=1']
+               '--params-file', str(PARAMS), '-p', 'agent_id:=1', '-p', f'{LIVE_SWITCH}:=true']
     with ros_node('param_test_client') as node, started(command, tmp_path / 'agent.log') as agent:
         client = services(node, '/agent_1/agent')
         described = call(node, client.describe_parameters(
@@ -125,10 +126,12 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
                               agents=[{'id': 1, 'start': [40.0, 50.0]},
                                       {'id': 2, 'start': [50.0, 50.0]}])
     common = ['--params-file', str(PARAMS), '-p', 'seed:=3']
-    world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *common,
+    live = ['-p', f'{LIVE_SWITCH}:=true']
+    world = [executable('sat_world_sim', 'world_sim'), '--ros-args', *common, *live,
              '-p', f'scenario:={scenario}', '-p', 'clock:=real_time', '-p', 'period:=0.3']
+    # Agent 2 keeps the default: its live parameters are read-only.
     agents = [[executable('sat_agent', 'agent'), '--ros-args', '-r', f'__ns:=/agent_{i}',
-               *common, '-p', f'agent_id:={i}'] for i in (1, 2)]
+               *common, '-p', f'agent_id:={i}', *switch] for i, switch in ((1, live), (2, []))]
     traffic, views = {}, set()
     with ros_node('param_test_client') as node, \
             started(world, tmp_path / 'world.log') as world_sim, \
@@ -178,3 +181,10 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
         spin_until(node, lambda: max(traffic) >= stopped_at + WATCH_STEPS, START_S,
                    f'{WATCH_STEPS} steps after view_rate 0', running)
         assert not [k for k in views if k >= stopped_at]
+
+        locked = services(node, '/agent_2/agent')
+        for name, value in (('view_rate', 0.0), ('world_timeout', 1e-6)):
+            assert_refused(node, locked, name, value, 'read-only')
+            assert call(node, locked.describe_parameters([name]), 'describe').descriptors[0] \
+                .read_only
+        assert get_one(node, locked, 'world_timeout') == 60.0

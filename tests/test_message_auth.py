@@ -392,6 +392,15 @@ def test_an_unreadable_key_file_is_named(tmp_path):
         load_key(path)
 
 
+@pytest.mark.skipif(os.geteuid() != 0, reason='only root can give a file to another user')
+def test_a_key_file_of_another_user_is_refused(tmp_path):
+    # Mode 0600 protects the key from everyone but its owner, who could rewrite it.
+    path = key_file(tmp_path / 'swarm.key')
+    os.chown(path, 65534, 65534)
+    with pytest.raises(KeyFileError, match=f'{path}: owned by uid 65534, not by this process'):
+        load_key(path)
+
+
 # -- where the tail lands in rclpy's CDR ----------------------------------------------------
 
 def test_rclpy_adds_no_padding_after_the_last_field():

@@ -3,7 +3,8 @@
 Every node also declares the SatParams groups (sat_agent.config); these are its own settings,
 given with ``-p name:=value`` (the bring-up and the launch file pass them). Each field is
 written once with ``param`` (sat_agent.parameter_schema); ``live`` ones may be changed with
-``ros2 param set`` while the node runs, the others are read-only.
+``ros2 param set`` while the node runs if it was started with ``live_parameters:=true``, the
+others are read-only.
 """
 
 from dataclasses import dataclass
@@ -12,6 +13,8 @@ from typing import Any, Mapping, Tuple
 from sat_agent.parameter_schema import check_given, group, leaves, param, ParameterError
 
 LONG_S = 86400.0    # upper bound of the waits in seconds: a day
+# The node parameter that lets a node's live parameters change while it runs (ros_params).
+LIVE_SWITCH = 'live_parameters'
 
 
 @dataclass(frozen=True)
@@ -31,6 +34,10 @@ class InputParams:
 class SteppingParams(InputParams):
     """What the agent and world_sim share: the standard views, the key, the drop counters."""
 
+    # Off by default: ROS 2 parameter services take anyone's call on the domain, unsigned.
+    live_parameters: bool = param(
+        False, "accept 'ros2 param set' of this node's live parameters while it runs; false = "
+        'every parameter is read-only (anyone on the ROS domain can call parameter services)')
     # 1 with dt = 1 s is every step; read at every step, so a change applies at once.
     view_rate: float = param(
         1.0, 'standard views (OccupancyGrid, MarkerArray, PoseArray, Path, PoseStamped) per '

@@ -5,8 +5,8 @@
 
 The launch arguments are the bring-up's run options (``ros2 launch ... --show-args`` lists
 them: scenario, params, run_dir, clock, period, agent_timeout, seed, steps, radio_loss,
-radio_delay, composed, respawn, record, view, view_rate, fastdds_profile, domain_id,
-key_file, no_auth), and the
+radio_delay, composed, respawn, record, view, view_rate, live_params, fastdds_profile,
+domain_id, key_file, no_auth), and the
 processes, their arguments and their environment come from the bring-up's own
 ``process_list`` and ``run_env`` (sat_world_sim.bringup): one source of truth, checked by
 tests/test_launch_parity.py. Every process runs with ``use_sim_time`` and the run's seed

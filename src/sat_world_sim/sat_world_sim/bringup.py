@@ -56,6 +56,7 @@ from ament_index_python.packages import get_package_prefix, get_package_share_di
 
 from sat_agent.config import load_params_file, ParameterError
 from sat_agent.message_auth import AUTH_OFF_WARNING, create_key_file, KeyFileError, load_key
+from sat_agent.node_params import LIVE_SWITCH
 
 from sat_world_sim import dds_udp, netns
 from sat_world_sim.domain_ids import claim_domain_id, NoFreeDomain
@@ -219,7 +220,9 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     """
     key = ('-p', f'auth_key_file:={options.key_file}') if options.key_file else ()
     params = ('--params-file', str(options.params), '-p', 'use_sim_time:=true', *key)
-    views = ('-p', f'view_rate:={options.view_rate}') if options.view_rate is not None else ()
+    # What world_sim and the agents share (node_params.SteppingParams).
+    stepping = ('-p', f'view_rate:={options.view_rate}') if options.view_rate is not None else ()
+    stepping += ('-p', f'{LIVE_SWITCH}:=true') if options.live_params else ()
     roster = ('-p', 'agent_ids:=[' + ','.join(str(i) for i in agent_ids) + ']')
     run_dir = ('-p', f'run_dir:={options.run_dir}', *roster)
     observers = [Process('metrics', 'sat_world_sim', 'metrics', ros_arguments=(
@@ -235,7 +238,7 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     world = (*params, '-p', f'scenario:={options.scenario}', '-p', f'clock:={options.clock}',
              '-p', f'period:={options.period}', '-p', f'agent_timeout:={options.agent_timeout}',
              '-p', f'observers:={len(observers)}', '-p', f'radio.loss:={options.radio_loss}',
-             '-p', f'radio.delay_steps:={options.radio_delay}', *seed, *views)
+             '-p', f'radio.delay_steps:={options.radio_delay}', *seed, *stepping)
     if options.steps is not None:
         world += ('-p', f'steps:={options.steps}')
     processes = [Process('world_sim', 'sat_world_sim', 'world_sim', ros_arguments=world),
@@ -243,12 +246,12 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     if options.composed:
         processes.append(Process('agents', 'sat_agent', 'agents_composed',
                                  arguments=('--ids', *map(str, agent_ids)),
-                                 ros_arguments=(*params, *roster, *seed, *views),
+                                 ros_arguments=(*params, *roster, *seed, *stepping),
                                  respawn=options.respawn))
     else:
         processes += [Process(f'agent_{i}', 'sat_agent', 'agent', ros_arguments=(
             '-r', f'__ns:=/agent_{i}', *params, '-p', f'agent_id:={i}', *roster, *seed,
-            *views), respawn=options.respawn) for i in agent_ids]
+            *stepping), respawn=options.respawn) for i in agent_ids]
     return processes
 
 
@@ -323,6 +326,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--view-rate', type=float, default=None,
                         help='standard views (RViz2/Foxglove) per second of sim time, 0 = none '
                              "(default: the nodes' view_rate)")
+    parser.add_argument('--live-params', action='store_true',
+                        help="let 'ros2 param set' change world_sim's and the agents' live "
+                             'parameters while they run (default: read-only, since anyone on '
+                             'the ROS domain can call parameter services)')
     parser.add_argument('--fastdds-profile', default=None,
                         help='Fast DDS XML profile (default: $FASTRTPS_DEFAULT_PROFILES_FILE, '
                              'else the installed config/fastdds.xml)')

@@ -27,8 +27,8 @@ Topics (relative, so under the namespace), with the QoS of sat_agent.ros.qos:
 Every header carries the step's sim time and a frame (sat_agent.stamps).
 
 Parameters: SatParams and node_params.AgentNodeParams (sat_agent.ros.ros_params declares them);
-those in LIVE may be changed with ``ros2 param set`` while the agent runs, the rest are
-read-only.
+with ``live_parameters:=true`` those in LIVE may be changed with ``ros2 param set`` while the
+agent runs; the rest, and by default all, are read-only.
 
 Until its first scan the agent announces on ``/world/ready`` how many readers its writers have
 matched (sat_agent.ros.readiness): world_sim starts once none of the run's first messages can
@@ -50,11 +50,13 @@ Lock-step: a scan says how many radio messages were forwarded to this agent for 
 seconds with what it has (a lost message must not stall it). If world_sim dies, the agent
 holds (it sends no command, so it does not move), resumes when scans come again, and exits
 cleanly (code 0) after ``world_timeout`` seconds without a scan. A robot's scans are stepped
-at once with the reports in the inbox, as in the real-time clock. Every message is validated
-on arrival (sat_agent.ros.msg_conversions and robot_input: finite numbers, lengths, the grid
-geometry, known modes and frames, sane counts, stale or future steps, the sender); an invalid
-one is dropped with a rate-limited warning and counted per reason, and the counters go to
-``/diagnostics`` every second.
+at once with the reports in the inbox, as in the real-time clock; one stamped more than
+MAX_CLOCK_LEAD steps ahead of the agent's own clock is refused (the robot topics are unsigned).
+Every message is validated on arrival (sat_agent.ros.msg_conversions and robot_input: finite
+numbers, lengths, the grid geometry, known modes and frames, sane counts, stale or future steps,
+the sender), a signed scan before it is taken (``_check_scan``); an invalid one is dropped
+with a rate-limited warning and counted per reason, and the counters go to ``/diagnostics``
+every second.
 """
 
 import argparse
@@ -98,6 +100,8 @@ from sat_msgs.msg import AgentStatus, ControlCommand, MeasurementSet, WorldStep
 
 # A scan further ahead than this is garbage, not a world that ran on without us.
 MAX_STEP_JUMP = 1000
+# A robot's scan may be stamped this many steps ahead of the agent's clock (_check_robot_clock).
+MAX_CLOCK_LEAD = 2
 # Reports older than this many steps are stale; younger late ones (radio latency) still add
 # their search density (Agent.step).
 MAX_REPORT_LAG = 4
@@ -170,7 +174,8 @@ class AgentNode(Node):
         else:
             inputs = [self.inputs.subscribe(MeasurementSet, 'measurements',
                                             self.on_measurements, STEP, self.limits.scan,
-                                            sender=WORLD_SENDER, names_sender=False),
+                                            sender=WORLD_SENDER, names_sender=False,
+                                            content=self._check_scan),
                       self.inputs.subscribe(WorldStep, '/world/step', self.on_world_step,
                                             WORLD, self.limits.step, sender=WORLD_SENDER),
                       *radio_in]
@@ -194,18 +199,20 @@ class AgentNode(Node):
                                         lambda data: self.on_radio(kind, channel, data),
                                         RADIO, raw=True)
 
-    def on_measurements(self, msg: MeasurementSet):
+    def _check_scan(self, msg: MeasurementSet):
+        """Raise InvalidMessage for a scan this agent cannot take (VerifiedInput's content hook).
+
+        Run before the scan is taken, so a signed scan refused here (another agent's, of an old
+        step, NaNs) does not advance the world's replay counter past the genuine one it races.
+        """
         if msg.agent_id != self.agent_id:
-            self.guard.drop('wrong_agent_id', f'scan for agent {msg.agent_id}')
-            return
-        if not self._new_step(msg.step):
-            return
-        try:
-            scan = measurements_from_msg(msg)
-        except InvalidMessage as error:
-            self.guard.drop(error.reason, f'scan of step {msg.step}: {error.detail}')
-            return
-        self._take_scan('measurements', msg.step, scan, msg.radio_deliveries)
+            raise InvalidMessage('wrong_agent_id', f'scan for agent {msg.agent_id}')
+        self._check_step(msg.step)
+        measurements_from_msg(msg)
+
+    def on_measurements(self, msg: MeasurementSet):
+        self._take_scan('measurements', msg.step, measurements_from_msg(msg),
+                        msg.radio_deliveries)
 
     def on_robot_pose(self, msg: PoseStamped):
         try:
@@ -217,12 +224,11 @@ class AgentNode(Node):
 
     def on_detections(self, msg: PointCloud2):
         step = step_at(msg.header.stamp.sec, msg.header.stamp.nanosec, self.dt)
-        if not self._new_step(step):
-            return
-        if self._robot_pose.xy is None:
-            self.guard.drop('no_pose', f'detections of step {step} before any robot/pose')
-            return
         try:
+            self._check_step(step)
+            self._check_robot_clock(step)
+            if self._robot_pose.xy is None:
+                raise InvalidMessage('no_pose', 'before any robot/pose')
             z = detections_from_msg(msg, self._robot_pose, self.agent_id)
         except InvalidMessage as error:
             self.guard.drop(error.reason, f'detections of step {step}: {error.detail}')
@@ -235,15 +241,26 @@ class AgentNode(Node):
             self.get_logger().info(f'the run finished after step {msg.step}: exiting')
             self._finished_at = time.monotonic()
 
-    def _new_step(self, step: int) -> bool:
-        """Whether a scan of this step is news: not stale, not absurdly far ahead."""
+    def _check_step(self, step: int):
+        """Raise InvalidMessage unless a scan of this step is news: not stale, not far ahead."""
         if step <= self.last_step:
-            self.guard.drop('stale_step', f'scan of step {step} after step {self.last_step}')
-            return False
+            raise InvalidMessage('stale_step', f'scan of step {step} after step {self.last_step}')
         if self.last_step and step > self.last_step + MAX_STEP_JUMP:
-            self.guard.drop('future_step', f'scan of step {step} at step {self.last_step}')
-            return False
-        return True
+            raise InvalidMessage('future_step', f'scan of step {step} at step {self.last_step}')
+
+    def _check_robot_clock(self, step: int):
+        """Raise InvalidMessage for a robot scan stamped ahead of this node's clock.
+
+        The robot's stamps are unsigned: without this bound a forged first scan stamped far
+        ahead would make every genuine later one stale. The drone's and the agent's clocks
+        agree to within dt / 2 (README, "A real drone"); MAX_CLOCK_LEAD steps also cover a
+        /clock that reaches this node after the scan of its step. A clock at 0 (sim time before
+        any /clock) bounds nothing.
+        """
+        now = self.get_clock().now().nanoseconds
+        if now and step > step_at(0, now, self.dt) + MAX_CLOCK_LEAD:
+            raise InvalidMessage('future_step', "stamped ahead of this node's clock "
+                                 f'(step {step_at(0, now, self.dt)})')
 
     def _take_scan(self, kind: str, step: int, scan, deliveries: int):
         self.guard.accept(kind)

@@ -10,7 +10,9 @@ the parameter, the value and what is allowed.
 While the node runs, ``ros2 param set`` of a read-only parameter is refused by rclpy; of a live
 one (those the node lists, each ``live`` in its schema) it is checked against the schema by the
 on-set callback, refused with the schema's message as the reason, or applied by the node's
-callback after it is stored.
+callback after it is stored. A node's live parameters are live only if it was started with
+``live_parameters:=true`` (node_params.LIVE_SWITCH): parameter services take anyone's call on
+the ROS domain, so by default every parameter is read-only.
 """
 
 from typing import Callable, Optional, Sequence
@@ -18,6 +20,7 @@ from typing import Callable, Optional, Sequence
 from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
                                 SetParametersResult)
 
+from sat_agent.node_params import LIVE_SWITCH
 from sat_agent.parameter_schema import build, leaves, ParameterError, Spec, with_overrides
 
 INT64 = 2 ** 63 - 1
@@ -46,10 +49,10 @@ def descriptor(spec: Spec, live: bool) -> ParameterDescriptor:
 class NodeParameters:
     """A node's parameters, declared from its schemas; ``values`` holds one instance per schema.
 
-    live: the dotted names this node applies while it runs (each must be live in its schema);
-    on_change(*values) is called after a live change is stored. Each live change is logged
-    with ``moment()``, where the node is in its run (e.g. "at step 12"), so a run's log says
-    from which step on a change holds. The schemas' names must not overlap. Raises
+    live: the dotted names this node applies while it runs (each must be live in its schema),
+    read-only unless a schema's LIVE_SWITCH is true; on_change(*values) is called after a live
+    change is stored. Each live change is logged with ``moment()``, where the node is in its
+    run (e.g. "at step 12"), so a run's log says from which step on a change holds. The schemas' names must not overlap. Raises
     ParameterError if a start-up value is not allowed.
     """
 
@@ -73,6 +76,9 @@ class NodeParameters:
                 given[name] = node.declare_parameter(name, value, plain).value
                 self._owner[name] = index
             self.values.append(build(schema, given))
+        if not any(getattr(values, LIVE_SWITCH, False) for values in self.values):
+            live = ()
+        for schema in schemas:
             for name, spec, _ in leaves(schema):
                 node.set_descriptor(name, descriptor(spec, name in live))
         node.add_on_set_parameters_callback(self._check)

@@ -16,7 +16,8 @@ loss, delay, counters); this node moves messages:
 
 Parameters: SatParams and sat_agent.node_params.WorldNodeParams; those in LIVE (the radio
 range C_R and loss, ``agent_timeout``, ``view_rate``) may be changed with ``ros2 param set``
-while it runs, the rest are read-only.
+while it runs if it was started with ``live_parameters:=true``; the rest, and by default all,
+are read-only.
 
 Clocks (parameter ``clock``):
 
