@@ -7,6 +7,9 @@ unsigned statuses, a 400 kB status, and, as an insider holding the key, a search
 grid claims 2^32-1 x 2^32-1 cells (a zlib bomb inside), a truth of step 2^32-1 and 100
 statuses from the far future. No observer may crash, hang or grow: every process exits 0, the
 run is the unattacked one (the in-process swarm's metrics), and each attack is counted.
+On the unsigned views, which only the recorder reads: density grids larger than any agent's
+and a flood of poses. Neither may fill the bag: the grids are not in it, the flood only up to
+its topic's budget (sat_world_sim.unsigned_input), and both are counted.
 """
 
 from array import array
@@ -14,21 +17,27 @@ from collections import Counter
 import os
 import zlib
 
-from geometry_msgs.msg import Point
+from geometry_msgs.msg import Point, PoseStamped
 from hostile import (attack_setup, Diagnostics, forge, Hostile, LATCHED,
                      read_metrics, RELIABLE, run_attacked)
+from nav_msgs.msg import OccupancyGrid
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from ros_harness import ros_node
+from ros_harness import PARAMS, ros_node
+from rosbags.rosbag2 import Reader
+from std_msgs.msg import Header
 from test_attack_swarm import genuine_scan, scan_step, without_dropped
 from test_swarm_ros import inprocess_metrics
 
+from sat_agent.config import load_params_file
 from sat_agent.message_auth import MonotonicCounter, Signer, WORLD_SENDER
 from sat_agent.ros.input_guard import peak_memory_kb
+from sat_agent.ros.message_limits import standard_limits
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import (AgentStatus, GridInfo, GroundTruth, MeasurementSet, SearchDensity,
                           TargetTruth, WorldStep)
 from sat_world_sim.ros.observer import WINDOW
+from sat_world_sim.unsigned_input import BURST as BUDGET_BURST, PER_STEP
 
 pytestmark = pytest.mark.ros
 STEPS = 30
@@ -43,6 +52,13 @@ MAX_GROWTH_KB = 40_000
 NEVER = 2 ** 32 - 1
 # 16 MB of zeros in 16 kB of zlib, made once: the attack must be sent at once, not after it.
 ZLIB_BOMB = zlib.compress(bytes(16 << 20), 9)
+# The unsigned views' attacks: grids with as many cells as the largest grid has bytes, and
+# BURST poses at each of FLOOD_STEPS (each below a reader's history).
+GRID_TOPIC = '/agent_1/view/search_density'
+GRID_LIMIT = standard_limits(load_params_file(PARAMS), (1, 2))['view/search_density']
+OVERSIZED_GRIDS = 3
+FLOOD_TOPIC = '/agent_1/view/pose'
+FLOOD_STEPS = (14, 16, 18)
 
 
 class Attacker:
@@ -51,6 +67,7 @@ class Attacker:
     def __init__(self, hostile, key, processes):
         self.hostile, self.key, self.processes = hostile, key, processes
         self.sent = Counter()        # reason -> messages every observer must refuse
+        self.recorder_sent = Counter()   # reason -> messages only the recorder reads, refuses
         self.hwm_before = {}         # observer -> VmHWM kB at scan 3
         self.insider_done = set()
 
@@ -96,6 +113,17 @@ class Attacker:
         if k == 12:
             # Fast DDS does not deliver an empty payload; it must not disturb anything either.
             h.send('/world/truth', GroundTruth, b'', LATCHED)
+        if k == 13:
+            grid = serialize_message(OccupancyGrid(header=Header(frame_id='map'),
+                                                   data=array('b', bytes(GRID_LIMIT))))
+            for _ in range(OVERSIZED_GRIDS):
+                h.send(GRID_TOPIC, OccupancyGrid, grid, LATCHED)
+            self.recorder_sent['too_large'] += OVERSIZED_GRIDS
+        if k in FLOOD_STEPS:
+            pose = serialize_message(PoseStamped(header=Header(frame_id='map')))
+            for _ in range(BURST):
+                h.send(FLOOD_TOPIC, PoseStamped, pose, LATCHED)
+            self.recorder_sent['rate_limited'] += BURST
 
     def on_agent_2(self, topic, msg_type, data):
         """Insider bombs signed as agent 2 right after its own message of step k."""
@@ -129,7 +157,7 @@ class Attacker:
 
 @pytest.fixture(scope='module')
 def attacked(tmp_path_factory):
-    """Run the attacked swarm; return (metrics, expected, attacker, diagnostics, codes)."""
+    """Run the attacked swarm; return (metrics, expected, attacker, diagnostics, bag, codes)."""
     tmp_path, scenario, key_file, key = attack_setup(tmp_path_factory, 'observers', 4, STEPS)
     with ros_node('hostile') as node:
         hostile = Hostile(node)
@@ -138,7 +166,8 @@ def attacked(tmp_path_factory):
         targets = [('/world/step', WorldStep, LATCHED), ('/world/truth', GroundTruth, LATCHED),
                    ('/agent_1/status', AgentStatus, RELIABLE),
                    ('/agent_2/status', AgentStatus, RELIABLE),
-                   (density, SearchDensity, RELIABLE)]
+                   (density, SearchDensity, RELIABLE),
+                   (GRID_TOPIC, OccupancyGrid, LATCHED), (FLOOD_TOPIC, PoseStamped, LATCHED)]
         attackers = []
 
         def watch(processes):
@@ -156,7 +185,8 @@ def attacked(tmp_path_factory):
         codes = run_attacked(node, hostile, tmp_path, scenario, STEPS, key_file, targets, watch,
                              diagnostics, ('/logger', '/recorder', '/metrics'), OBSERVERS)
         attacker = attackers[0]
-    return read_metrics(tmp_path), inprocess_metrics(scenario), attacker, diagnostics, codes
+    return (read_metrics(tmp_path), inprocess_metrics(scenario), attacker, diagnostics,
+            tmp_path / 'run' / 'bag', codes)
 
 
 def test_no_observer_crashes_or_hangs_and_the_run_ends_normally(attacked):
@@ -184,7 +214,7 @@ def least_counted(attacker, reasons: str) -> int:
 
 
 def test_every_observer_counts_each_attack_under_its_reason(attacked):
-    metrics, _, attacker, diagnostics, _ = attacked
+    metrics, _, attacker, diagnostics, *_ = attacked
     for reasons in attacker.sent:
         least = least_counted(attacker, reasons)
         reasons = reasons.split('|')
@@ -204,8 +234,35 @@ def test_bombs_leave_the_observers_memory_flat(attacked):
     The final counters, not /proc at a later scan: the test may receive that scan after the
     observers have exited (it is not in the run's lock step).
     """
-    _, _, attacker, diagnostics, _ = attacked
+    _, _, attacker, diagnostics, *_ = attacked
     for name in OBSERVERS:
         before = attacker.hwm_before[name]
         after = int(diagnostics.values[f'/{name}']['peak_memory_kb'])
         assert after - before < MAX_GROWTH_KB, (name, before, after)
+
+
+def bag_sizes(bag) -> dict:
+    """Return {topic: [payload sizes in bytes]} of a bag."""
+    sizes = {}
+    with Reader(bag) as reader:
+        for connection, _, raw in reader.messages():
+            sizes.setdefault(connection.topic, []).append(len(raw))
+    return sizes
+
+
+def test_the_recorder_bounds_what_it_writes_of_unsigned_topics(attacked):
+    """No oversized grid is in the bag, the flood only up to its budget; both are counted."""
+    _, _, attacker, diagnostics, bag, _ = attacked
+    sizes = bag_sizes(bag)
+    assert max(sizes[GRID_TOPIC]) <= GRID_LIMIT and len(sizes[GRID_TOPIC]) <= STEPS
+    assert diagnostics.dropped('/recorder', 'too_large') >= \
+        attacker.sent['too_large'] + attacker.recorder_sent['too_large']
+    # Genuine messages and the flood share the topic's budget: at most BUDGET_BURST, then
+    # PER_STEP per world step. More than that arrived (a whole flood of BURST at least); the
+    # rest is counted.
+    budget = BUDGET_BURST + PER_STEP * STEPS
+    flood_in_bag = len(sizes[FLOOD_TOPIC])
+    assert flood_in_bag <= budget
+    assert flood_in_bag + diagnostics.dropped('/recorder', 'rate_limited') > budget
+    # Every other topic keeps its own budget: the genuine publishers are never refused.
+    assert len(sizes['/clock']) == STEPS

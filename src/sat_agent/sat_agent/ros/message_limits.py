@@ -1,4 +1,4 @@
-"""The largest valid payload of every signed topic, computed once at start-up.
+"""The largest valid payload of every topic of the graph, computed once at start-up.
 
 A raw subscription still receives the whole DDS sample, but a payload above its topic's limit
 is refused before it is hashed or deserialized (signed_io.VerifiedInput), with authentication
@@ -8,18 +8,30 @@ serialized size of the largest message a valid sender can send, so it follows th
 definitions and the parameters by construction: every list at its bound (MAX_DETECTIONS,
 MAX_TARGETS, the roster, the lattice, the search map's nodes, STATUS_PARTICLES), every string
 at MAX_NAME characters.
+
+MessageLimits covers the signed sat_msgs topics; standard_limits the unsigned standard-typed
+ones (sat_agent.topic_names), whose largest messages are built by the publishers' own builders
+(sat_agent.ros.views), so a view that grows grows its limit with it. The recorder refuses
+larger ones (sat_world_sim.unsigned_input): anyone on the domain can publish there.
 """
 
 from dataclasses import dataclass
+import sys
+from typing import Collection, Dict
 
 from geometry_msgs.msg import Point
+import numpy as np
 from rclpy.serialization import serialize_message
+from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Header
 
+from sat_agent import state_extraction
 from sat_agent.density_codec import max_encoded_bytes
+from sat_agent.ros import views
 from sat_agent.ros.msg_conversions import MAX_DETECTIONS, MAX_TARGETS
 from sat_agent.search_density import Lattice
 from sat_agent.search_map import SearchMap
+from sat_agent.topic_names import CLOCK, ROBOT_GOAL, TRUTH_MARKERS, VIEW_PREFIX
 from sat_msgs.msg import (AgentMode, AgentStatus, AgentTruth, ControlCommand, GroundTruth,
                           MeasurementSet, MultiTargetEstimate, RadioTraffic,
                           RangeBearing, SearchDensity, TargetEstimate, TargetTruth, WorldStep)
@@ -30,6 +42,10 @@ STATUS_PARTICLES = 300
 MAX_NAME = 256
 # A list before the Auth block may be followed by up to 7 bytes of padding (8-alignment).
 _PADDING = 8
+# The weight whose label text ('{:.2f}', views.estimate_markers) is the longest a float has.
+_LONGEST_WEIGHT = -sys.float_info.max
+# The largest target id (uint32 in GroundTruth): the longest label of views.truth_markers.
+_LARGEST_TARGET_ID = 2 ** 32 - 1
 
 
 def _size(msg) -> int:
@@ -90,3 +106,42 @@ class MessageLimits:
         """Return the limit of a radio report kind (agent_core.REPORT_KINDS)."""
         return {'search_density': self.density, 'estimate': self.estimate,
                 'mode': self.mode}[kind]
+
+
+def standard_limits(params, agent_ids: Collection[int]) -> Dict[str, int]:
+    """Bytes allowed per standard-typed topic, by its name in sat_agent.topic_names.
+
+    Keys: /clock, /world/truth_markers and, relative to an agent's namespace, robot/goal and
+    view/<name> for each of topic_names.AGENT_VIEWS. params: sat_agent.config's; agent_ids:
+    the roster.
+    """
+    lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
+    nodes = SearchMap.for_area(params.area, params.search.node_spacing).size
+    header = _header()
+    estimate = _view_estimate()
+    # The id with the most digits gives the longest namespaces and labels.
+    longest_id = max(agent_ids, key=lambda i: len(str(i)), default=0)
+    pose = _size(views.pose_stamped((0.0, 0.0), header))
+    view = {'search_density': views.occupancy_grid(np.zeros((lattice.ny, lattice.nx)),
+                                                   lattice, header),
+            'estimates': views.estimate_markers(longest_id, estimate, header),
+            'estimate_poses': views.estimate_poses(estimate, header),
+            # The walk's nodes and its return to the start (as AgentStatus.plan).
+            'plan': views.plan_path(np.zeros((nodes + 1, 2)), header)}
+    limits = {VIEW_PREFIX + name: _size(msg) for name, msg in view.items()}
+    limits[VIEW_PREFIX + 'pose'] = limits[ROBOT_GOAL[0]] = pose
+    limits[CLOCK[0]] = _size(Clock())
+    limits[TRUTH_MARKERS[0]] = _size(views.truth_markers(
+        [_LARGEST_TARGET_ID] * MAX_TARGETS, np.zeros((MAX_TARGETS, 2)),
+        dict.fromkeys(agent_ids, (0.0, 0.0)), (params.area.width, params.area.height),
+        params.sensor.square_side, header))
+    return limits
+
+
+def _view_estimate() -> state_extraction.MultiTargetEstimate:
+    """MAX_TARGETS estimates, each with the longest label (what a view can draw at most)."""
+    target = state_extraction.TargetEstimate(position=np.zeros(2), velocity=np.zeros(2),
+                                             covariance=np.zeros((4, 4)),
+                                             weight=_LONGEST_WEIGHT)
+    return state_extraction.MultiTargetEstimate(targets=(target,) * MAX_TARGETS,
+                                                cardinality=0.0)

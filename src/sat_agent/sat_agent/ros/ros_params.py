@@ -52,8 +52,8 @@ class NodeParameters:
     live: the dotted names this node applies while it runs (each must be live in its schema),
     read-only unless a schema's LIVE_SWITCH is true; on_change(*values) is called after a live
     change is stored. Each live change is logged with ``moment()``, where the node is in its
-    run (e.g. "at step 12"), so a run's log says from which step on a change holds. The schemas' names must not overlap. Raises
-    ParameterError if a start-up value is not allowed.
+    run (e.g. "at step 12"), so a run's log says from which step on a change holds. The
+    schemas' names must not overlap. Raises ParameterError if a start-up value is not allowed.
     """
 
     def __init__(self, node, schemas: Sequence[type], live: Sequence[str] = (),

@@ -17,7 +17,15 @@ Only verified bytes are recorded (observer.signature_of says how each topic is s
 signed topic's message is size-checked and verified, never deserialized (but /world/step, for
 ``finished``), and a refused one is counted on /diagnostics instead of written. The bag keeps
 the signatures: a live replay of it is accepted by nodes with the run's key or with
-authentication off. Standard-typed topics (clock, views, markers, robot/goal) are not signed.
+authentication off. Standard-typed topics (clock, views, markers, robot/goal) are not signed,
+so anyone on the domain can publish there; they are bounded instead (unsigned_input), never
+deserialized either (but a recorded robot/goal's stamp at the end): a message larger than the
+largest a genuine publisher can send (message_limits.standard_limits, computed at start-up) is
+refused as ``too_large``, one beyond its topic's budget (BURST messages, then PER_STEP more
+per world step, where a genuine publisher sends one) as ``rate_limited``, both counted on
+/diagnostics. The step is the one the verifier learned from the world's signed messages. A
+publisher on the domain can still write into the bag, but at most PER_STEP messages per
+topic and step of at most the genuine size (after a first BURST), not fill the disk.
 """
 
 from pathlib import Path
@@ -30,6 +38,7 @@ from rosbags.interfaces import (Qos, QosDurability, QosHistory, QosLiveliness, Q
 
 from sat_agent.config import SatParams
 from sat_agent.node_params import ObserverParams
+from sat_agent.ros.message_limits import standard_limits
 from sat_agent.ros.msg_conversions import message_class
 from sat_agent.ros.node_runner import finish_run, run_nodes, steady_timer
 from sat_agent.ros.readiness import ReadyAnnouncer
@@ -42,6 +51,7 @@ from sat_world_sim.bag_writer import RunBagWriter
 from sat_world_sim.ros.observer import observer_input, signature_of
 from sat_world_sim.ros.replay_support import topic_qos
 from sat_world_sim.topics import graph_topics, Topic
+from sat_world_sim.unsigned_input import UnsignedInput
 
 # After the world's final step, wait at most this long for the run's last messages.
 FINAL_WAIT_S = 10.0
@@ -79,28 +89,38 @@ class RecorderNode(Node):
         self._finished_at = None
         self._agent_ids = agent_ids
         self._last = {}          # topic -> (Topic, CDR bytes of its last message)
+        topics = graph_topics(agent_ids)
+        signatures = {topic.name: signature_of(topic.name, limits) for topic in topics}
+        self.unsigned = UnsignedInput([name for name, signature in signatures.items()
+                                       if signature is None],
+                                      standard_limits(params, agent_ids))
         subscriptions = []
-        for topic in graph_topics(agent_ids):
+        for topic in topics:
             qos = topic_qos(topic)
             connection = self.writer.add_connection(topic.name, topic.msgtype, typestore=store,
                                                     offered_qos_profiles=[bag_qos(qos)])
             subscriptions.append(self.create_subscription(
                 message_class(topic.msgtype), topic.name,
                 lambda data, c=connection, t=topic,
-                signature=signature_of(topic.name, limits): self._take(c, t, signature, data),
+                signature=signatures[topic.name]: self._take(c, t, signature, data),
                 qos, raw=True))
         self.ready = ReadyAnnouncer(self, subscriptions)
         steady_timer(self, 0.2, self._tick)
 
     def _take(self, connection, topic: Topic, signature, data: bytes):
-        """Record a message that passes its topic's checks (signature None: not signed)."""
+        """Record a message that passes its topic's checks (signature None: unsigned, bounded)."""
         if topic.name == '/world/step':
             msg = self.inputs.receive(topic.name, data, WorldStep, **signature)
             if msg is None:
                 return
             if msg.finished:
                 self._finished_at = time.monotonic()
-        elif signature is not None:
+        elif signature is None:
+            refusal = self.unsigned.refusal(topic.name, len(data), self.inputs.verifier.step)
+            if refusal is not None:
+                self.inputs.guard.drop(*refusal)
+                return
+        else:
             checks = {k: v for k, v in signature.items() if k != 'names_sender'}
             if self.inputs.check(topic.name, data, **checks) is False:
                 return
