@@ -116,6 +116,10 @@ def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_pat
         assert get_one(node, client, 'search.investigate_steps') == 7
         applied = set_one(node, client, 'view_rate', 2)     # an int for a float is fine
         assert applied.successful, applied.reason
+        # Outside the schemas: rclpy's clock switch (a robot agent's check of its scans' stamps
+        # reads the clock) and the roster stay as started, live parameters or not.
+        assert_refused(node, client, 'use_sim_time', True, "'use_sim_time' is read-only")
+        assert_refused(node, client, 'agent_ids', [1, 2, 3], "'agent_ids' is read-only")
         assert agent.poll() is None, (tmp_path / 'agent.log').read_text()
 
 
@@ -188,3 +192,6 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
             assert call(node, locked.describe_parameters([name]), 'describe').descriptors[0] \
                 .read_only
         assert get_one(node, locked, 'world_timeout') == 60.0
+        assert_refused(node, locked, 'use_sim_time', True,
+                       f"'use_sim_time' is read-only while the node runs (started without "
+                       f'{LIVE_SWITCH}:=true)')

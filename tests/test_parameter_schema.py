@@ -9,8 +9,8 @@ import pytest
 from sat_agent.agent_core import Agent
 from sat_agent.beyond_paper.investigation import Investigation
 from sat_agent.config import load_params_file, ParameterError, SatParams
-from sat_agent.node_params import (AgentNodeParams, LoggerParams, NODE_SCHEMAS, ObserverParams,
-                                   WorldNodeParams)
+from sat_agent.node_params import (AgentNodeParams, LIVE_SWITCH, LoggerParams, NODE_SCHEMAS,
+                                   ObserverParams, WorldNodeParams)
 from sat_agent.parameter_schema import build, leaves, live_names
 from sat_agent.ros import agent_node
 from sat_agent.ros.ros_params import descriptor
@@ -78,6 +78,11 @@ def test_every_live_parameter_is_applied_by_a_node_and_nodes_apply_only_live_one
     applied = set(agent_node.LIVE) | set(world_sim_node.LIVE)
     assert live == applied
     assert {'cooperation.comm_range', 'search.investigate_steps', 'view_rate'} <= applied
+    # The switch that lets them change is a read-only flag, off by default, of both nodes.
+    for schema, given in ((AgentNodeParams, {'agent_id': 1}), (WorldNodeParams, {})):
+        switch = spec_of(schema, LIVE_SWITCH)
+        assert switch.kind == 'bool' and not switch.live
+        assert getattr(build(schema, given), LIVE_SWITCH) is False
 
 
 def test_every_parameter_has_a_description_and_the_defaults_pass_but_required_ones():

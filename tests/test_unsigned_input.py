@@ -17,7 +17,7 @@ from rosgraph_msgs.msg import Clock
 from sat_agent import state_extraction
 from sat_agent.config import load_params_file
 from sat_agent.ros import views
-from sat_agent.ros.message_limits import MAX_NAME, MessageLimits, standard_limits
+from sat_agent.ros.message_limits import MessageLimits, standard_limits
 from sat_agent.ros.msg_conversions import header, MAX_TARGETS
 from sat_agent.search_density import Lattice
 from sat_agent.search_map import SearchMap
@@ -97,7 +97,7 @@ def test_the_largest_genuine_messages_fit(profile):
 
 
 def test_the_limits_are_the_builders_largest_messages(profile):
-    """Every list at its bound, a MAX_NAME frame id, the longest labels: the limit exactly.
+    """Every list at its bound, the map frame, the longest labels: the limit exactly.
 
     One element more exceeds it. The longest labels: the weight of the longest '{:.2f}' (the
     most negative float), target ids of 10 digits (uint32).
@@ -105,7 +105,7 @@ def test_the_limits_are_the_builders_largest_messages(profile):
     params, limits = profile
     lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
     nodes = SearchMap.for_area(params.area, params.search.node_spacing).size
-    stamp = header(STEP, params.motion.dt, 'x' * MAX_NAME)
+    stamp = header(STEP, params.motion.dt)
     area = (params.area.width, params.area.height)
 
     def largest(extra: int):

@@ -145,7 +145,8 @@ def create_key_file(path) -> Path:
 def load_key(path) -> bytes:
     """Read a key file: a regular file of >= MIN_KEY_BYTES raw bytes, readable by its owner only.
 
-    The owner must be this process's user (as OpenSSH's StrictModes): another could rewrite it.
+    The owner must be this process's user or root (as OpenSSH's StrictModes): another user
+    could rewrite it.
     Raises KeyFileError naming the path and the problem. The checks run on the opened file
     (fstat), so the file checked is the file read.
     """
@@ -160,10 +161,11 @@ def load_key(path) -> bytes:
         os.close(fd)
         raise KeyFileError(f'auth key file {path}: not a regular file')
     with os.fdopen(fd, 'rb') as key_file:
-        if info.st_uid != os.geteuid():
+        if info.st_uid not in (os.geteuid(), 0):
             raise KeyFileError(
-                f"auth key file {path}: owned by uid {info.st_uid}, not by this process's user "
-                f'(uid {os.geteuid()}); allowed: a file of your own (chown {os.geteuid()} {path})')
+                f"auth key file {path}: owned by uid {info.st_uid}, neither this process's "
+                f"user (uid {os.geteuid()}) nor root; allowed: a file of your own or root's "
+                f'(chown {os.geteuid()} {path})')
         if info.st_mode & 0o077:
             raise KeyFileError(
                 f'auth key file {path}: mode {stat.S_IMODE(info.st_mode):04o} lets other users '

@@ -27,7 +27,8 @@ class InputParams:
     # A path, never the key: parameters can be read by anyone on the domain.
     auth_key_file: str = param(
         '', "the run's swarm key file (sat_agent/message_auth.py: >= 32 random bytes, mode "
-        "0600) to sign and verify messages with; '' = authentication off (warned)")
+        "0600, owned by the node's user or root) to sign and verify messages with; '' = "
+        'authentication off (warned)')
 
 
 @dataclass(frozen=True)

@@ -337,8 +337,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help='ROS_DOMAIN_ID (default: one no other run on this machine holds, '
                              'from 1..89; sat_world_sim/domain_ids.py)')
     parser.add_argument('--key-file', default=None,
-                        help='swarm key file (>= 32 random bytes, mode 0600) to sign with, e.g. '
-                             'shared by the machines of one swarm (default: a new key per run)')
+                        help="swarm key file (>= 32 random bytes, mode 0600, yours or root's) "
+                             'to sign with, e.g. shared by the machines of one swarm (default: a '
+                             'new key per run)')
     parser.add_argument('--netns', action='store_true',
                         help='world_sim and the observers on one network namespace, each agent '
                              'process on its own, DDS over UDP between them (root only)')

@@ -11,8 +11,10 @@ at MAX_NAME characters.
 
 MessageLimits covers the signed sat_msgs topics; standard_limits the unsigned standard-typed
 ones (sat_agent.topic_names), whose largest messages are built by the publishers' own builders
-(sat_agent.ros.views), so a view that grows grows its limit with it. The recorder refuses
-larger ones (sat_world_sim.unsigned_input): anyone on the domain can publish there.
+(sat_agent.ros.views) in the map frame every view is drawn in, so a view that grows grows
+its limit with it. The recorder refuses larger ones (sat_world_sim.unsigned_input): anyone on
+the domain can publish there. The largest genuine view is an estimates MarkerArray of
+MAX_TARGETS estimates (0.8 MB), the truth markers next (0.28 MB with 4 agents).
 """
 
 from dataclasses import dataclass
@@ -31,6 +33,7 @@ from sat_agent.ros import views
 from sat_agent.ros.msg_conversions import MAX_DETECTIONS, MAX_TARGETS
 from sat_agent.search_density import Lattice
 from sat_agent.search_map import SearchMap
+from sat_agent.stamps import MAP_FRAME
 from sat_agent.topic_names import CLOCK, ROBOT_GOAL, TRUTH_MARKERS, VIEW_PREFIX
 from sat_msgs.msg import (AgentMode, AgentStatus, AgentTruth, ControlCommand, GroundTruth,
                           MeasurementSet, MultiTargetEstimate, RadioTraffic,
@@ -117,7 +120,8 @@ def standard_limits(params, agent_ids: Collection[int]) -> Dict[str, int]:
     """
     lattice = Lattice.for_area(params.area, params.search.lattice_spacing)
     nodes = SearchMap.for_area(params.area, params.search.node_spacing).size
-    header = _header()
+    # Every view is drawn in the map frame (sat_agent.stamps): no MAX_NAME frame ids here.
+    header = Header(frame_id=MAP_FRAME)
     estimate = _view_estimate()
     # The id with the most digits gives the longest namespaces and labels.
     longest_id = max(agent_ids, key=lambda i: len(str(i)), default=0)

@@ -12,7 +12,8 @@ one (those the node lists, each ``live`` in its schema) it is checked against th
 on-set callback, refused with the schema's message as the reason, or applied by the node's
 callback after it is stored. A node's live parameters are live only if it was started with
 ``live_parameters:=true`` (node_params.LIVE_SWITCH): parameter services take anyone's call on
-the ROS domain, so by default every parameter is read-only.
+the ROS domain, so by default every parameter is read-only, rclpy's ``use_sim_time`` and those
+a node declares outside the schemas included (the on-set callback refuses them).
 """
 
 from typing import Callable, Optional, Sequence
@@ -76,11 +77,11 @@ class NodeParameters:
                 given[name] = node.declare_parameter(name, value, plain).value
                 self._owner[name] = index
             self.values.append(build(schema, given))
-        if not any(getattr(values, LIVE_SWITCH, False) for values in self.values):
-            live = ()
+        self._switched_on = any(getattr(values, LIVE_SWITCH, False) for values in self.values)
+        self._live = frozenset(live if self._switched_on else ())
         for schema in schemas:
             for name, spec, _ in leaves(schema):
-                node.set_descriptor(name, descriptor(spec, name in live))
+                node.set_descriptor(name, descriptor(spec, name in self._live))
         node.add_on_set_parameters_callback(self._check)
         node.add_post_set_parameters_callback(self._apply)
 
@@ -93,6 +94,18 @@ class NodeParameters:
                 for values, change in zip(self.values, changes)]
 
     def _check(self, parameters) -> SetParametersResult:
+        """Refuse a change of anything but the live parameters, or a value the schema refuses.
+
+        Also the parameters outside the schemas (rclpy's ``use_sim_time``, which would stop the
+        node's clock, and those a node declares itself, like the roster ``agent_ids``). Names
+        the node does not have yet are being declared, and pass.
+        """
+        for parameter in parameters:
+            if self._node.has_parameter(parameter.name) and parameter.name not in self._live:
+                why = '' if self._switched_on else f' (started without {LIVE_SWITCH}:=true)'
+                return SetParametersResult(
+                    successful=False,
+                    reason=f"parameter '{parameter.name}' is read-only while the node runs{why}")
         try:
             self._changed(parameters)
         except ParameterError as error:
