@@ -255,7 +255,8 @@ class AgentNode(Node):
         ahead would make every genuine later one stale. The drone's and the agent's clocks
         agree to within dt / 2 (README, "A real drone"); MAX_CLOCK_LEAD steps also cover a
         /clock that reaches this node after the scan of its step. A clock at 0 (sim time before
-        any /clock) bounds nothing.
+        any /clock) bounds nothing; under sim time the bound is only as good as /clock, which is
+        unsigned too.
         """
         now = self.get_clock().now().nanoseconds
         if now and step > step_at(0, now, self.dt) + MAX_CLOCK_LEAD:
