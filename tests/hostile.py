@@ -139,7 +139,7 @@ def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_
         # writes an agent's commands (a hijack), or world_sim would wait for the observer it is
         # not and start only at its start-up timeout.
         announce(node, watched, [hostile.publisher(*target) for target in targets],
-                 observer=True)
+                 observer=True, key=load_key(key_file))
         spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 240,
                    'the attacked run ended', processes.values())
         spin_until(node, lambda: diagnostics.final(*final_from), 30,

@@ -155,15 +155,16 @@ def bringup(command):
         stop_group(process, grace=scaled(BRINGUP_STOP_S))
 
 
-def announce(node, subscriptions, publishers=(), observer: bool = False):
+def announce(node, subscriptions, publishers=(), observer: bool = False, key=None):
     """Take part in world_sim's start-up handshake (sat_agent.ros.readiness) as a test node.
 
     A test node that plays agents passes their writers, one that watches the run its
     subscriptions; world_sim counts a node that writes no agent's commands as an observer, and
-    one that says observer (an attacker's writers on agents' topics).
+    one that says observer (an attacker's writers on agents' topics). key: the run's key, which
+    a world_sim with a key needs the announcement signed with.
     """
     from sat_agent.ros.readiness import ReadyAnnouncer
-    return ReadyAnnouncer(node, subscriptions, publishers, observer=observer)
+    return ReadyAnnouncer(node, subscriptions, publishers, observer=observer, key=key)
 
 
 def executable(package: str, name: str) -> str:

@@ -6,8 +6,9 @@ a wrong key, and replays of agent 1's genuine commands), a step jump (scans of s
 phantom scans (ten forged detections near a fake target, from a wrong key), agent 2's genuine
 reports published straight on agent 1's inbox, an unknown agent 99 (without the key, and as
 an insider with a valid world seal), replays of a genuine /world/step and of a genuine
-delivery, and malformed start-up announcements on the unsigned /world/ready (JSON nested past
-the parser's recursion limit, ill-typed, oversized), which ended world_sim before session 73.
+delivery, and malformed start-up announcements on /world/ready (JSON nested past the parser's
+recursion limit, ill-typed, oversized), which ended world_sim before session 73, and a
+well-formed one for a fake observer, unsigned and signed with a wrong key (session 74).
 Every attack must fail and be counted under its reason by the node it targets (/diagnostics,
 metrics.json's ``dropped``), and the run must be the unattacked one: its metrics equal the
 in-process swarm's for the same scenario and seed.
@@ -24,8 +25,8 @@ from ros_harness import ros_node
 from std_msgs.msg import String
 from test_swarm_ros import inprocess_metrics
 
-from sat_agent.message_auth import (AuthError, MessageVerifier, Signer, StepWindow,
-                                    WORLD_SENDER)
+from sat_agent.message_auth import (AuthError, MessageVerifier, MonotonicCounter, Signer,
+                                    StepWindow, WORLD_SENDER)
 from sat_agent.ros import readiness
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import AgentMode, ControlCommand, MeasurementSet, RangeBearing, WorldStep
@@ -86,11 +87,17 @@ def attack(hostile, sent, k, key):
         hostile.send(inbox, AgentMode, Signer(key, WORLD_SENDER).seal(inbox, signed, k))
         sent[(AGENT_1, 'unknown_sender')] += 1
     if k == 9:
-        for text in ('[' * 1000, '{"node": "/x", "reads": [["/t"]], "writes": {}}',
-                     ' ' * (readiness.MAX_ANNOUNCEMENT_BYTES + 1)):
+        # The run is signed: an announcement must come in an envelope whose MAC verifies.
+        forged = readiness.announcement('/fake_observer', [], {}, observer=True)
+        for text, reason in (
+                ('[' * 1000, 'bad_announcement'),
+                (' ' * (readiness.MAX_ANNOUNCEMENT_BYTES + 1), 'bad_announcement'),
+                ('{"node": "/x", "reads": [["/t"]], "writes": {}}', 'unsigned'),
+                (forged, 'unsigned'),
+                (readiness.seal(forged, bytes(32), MonotonicCounter()), 'bad_signature')):
             hostile.send(readiness.TOPIC, String, serialize_message(String(data=text)),
                          readiness.QOS)
-            sent[(WORLD, 'bad_announcement')] += 1
+            sent[(WORLD, reason)] += 1
     if k == 10:
         old_step = hostile.captured['/world/step'][1]
         hostile.send('/world/step', WorldStep, old_step, LATCHED)
@@ -111,6 +118,12 @@ def attacked(tmp_path_factory):
         diagnostics = Diagnostics(node)
 
         def watch(_):
+            # Before the start, unsigned: a fake observer that world_sim would count among the
+            # observers it waits for, and so start before one of them is ready.
+            early = readiness.announcement('/early_observer', [], {}, observer=True)
+            hostile.send(readiness.TOPIC, String, serialize_message(String(data=early)),
+                         readiness.QOS)
+            sent[(WORLD, 'unsigned')] += 1
             return [hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
                                     lambda data: genuine_scan(data, key)
                                     and attack(hostile, sent, scan_step(data), key)),

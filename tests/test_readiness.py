@@ -1,11 +1,19 @@
-"""The start-up handshake's rule (sat_agent.ros.readiness.unmet), without a graph."""
+"""The start-up handshake's rule (sat_agent.ros.readiness), without a graph.
+
+What world_sim waits for (unmet), what it takes as an announcement (parse), what it takes with
+the run's key (seal, unseal: a signed envelope) and what it keeps (Announcements).
+"""
 
 import json
 
 import pytest
 
+from sat_agent.message_auth import MonotonicCounter
 from sat_agent.ros.readiness import (
-    announcement, AnnouncementError, MAX_ANNOUNCEMENT_BYTES, parse, unmet)
+    announcement, AnnouncementError, Announcements, MAX_ANNOUNCEMENT_BYTES, parse, seal, unmet,
+    unseal)
+
+KEY = bytes(range(32))
 
 WORLD_READS = ['/agent_1/cmd', '/agent_1/radio/out/mode']
 WORLD_WRITES = {'/agent_1/measurements': 2, '/world/step': 1}
@@ -97,3 +105,55 @@ def test_an_announcement_parses_back_to_what_was_announced():
 def test_a_malformed_announcement_is_refused_with_its_reason(text):
     with pytest.raises(AnnouncementError):
         parse(text)
+
+
+def test_with_a_key_an_announcement_travels_signed_and_opens_to_its_text():
+    text = announcement('/metrics', ['/world/step'], {}, observer=True)
+    counter = MonotonicCounter(lambda: 41)
+    sealed = seal(text, KEY, counter)
+    assert json.loads(sealed)['signed'] == text
+    assert unseal(sealed, KEY) == (text, 41)
+    assert unseal(seal(text, KEY, counter), KEY) == (text, 42)
+    # Without a key both sides use the plain text.
+    assert seal(text, None, counter) == text and unseal(text, None) == (text, None)
+
+
+def envelope(**change) -> str:
+    good = json.loads(seal(announcement('/fake', [], {}, observer=True), KEY,
+                           MonotonicCounter(lambda: 7)))
+    return json.dumps({**good, **change})
+
+
+@pytest.mark.parametrize('data, reason', [
+    # A well-formed announcement, unsigned: it could start the run before an observer is ready.
+    (announcement('/fake', [], {}, observer=True), 'unsigned'),
+    ('{"signed": "{}", "counter": 1}', 'unsigned'),
+    (envelope(counter=True), 'unsigned'),
+    (envelope(counter=-1), 'unsigned'),
+    (envelope(extra=1), 'unsigned'),
+    (envelope(mac='00' * 32), 'bad_signature'),
+    (envelope(counter=8), 'bad_signature'),          # the counter is signed too
+    (envelope(signed=announcement('/fake', [], {'/agent_1/cmd': 9})), 'bad_signature'),
+    (seal(announcement('/fake', [], {}), bytes(32), MonotonicCounter()), 'bad_signature'),
+    ('[' * 1000, 'bad_announcement'),
+    (' ' * (MAX_ANNOUNCEMENT_BYTES + 1), 'bad_announcement'),
+])
+def test_with_a_key_anything_but_a_verified_envelope_is_refused_with_its_reason(data, reason):
+    with pytest.raises(AnnouncementError) as error:
+        unseal(data, KEY)
+    assert error.value.reason == reason
+
+
+def test_world_sim_keeps_a_nodes_announcement_only_while_its_counter_grows():
+    book = Announcements(room=2)
+    first, later = json.loads(announcement('/a', [], {'/t': 0})), \
+        json.loads(announcement('/a', [], {'/t': 1}))
+    assert book.take(first, 10) is None and book.take(later, 11) is None
+    # A replay of the older one (fewer matched readers) would hold the start.
+    assert book.take(first, 10)[0] == 'replayed' and book['/a'] == later
+    assert book.take(json.loads(announcement('/b', [], {})), 1) is None
+    assert book.take(json.loads(announcement('/c', [], {})), 1)[0] == 'too_many_announcers'
+    # Without a key there is no counter: the last one is kept.
+    plain = Announcements(room=1)
+    assert plain.take(later, None) is None and plain.take(first, None) is None
+    assert plain['/a'] == first

@@ -205,6 +205,15 @@ def _mac(key: bytes, channel: str, *parts) -> bytes:
     return digest.digest()
 
 
+def text_mac(key: bytes, channel: str, text: str, counter: int) -> str:
+    """Return the hex MAC of a text sent on a standard-typed channel with its sender's counter.
+
+    For what is not a sat_msgs type (the start-up announcements' JSON, sat_agent.ros.readiness):
+    the same key, domain and channel binding as a message's block, over the counter and text.
+    """
+    return _mac(key, channel, int(counter).to_bytes(8, 'little'), text.encode()).hex()
+
+
 def _sender_mac(key: bytes, channel: str, view: memoryview, end: int) -> bytes:
     """MAC of a sender's block ending at `end`: everything before its MAC."""
     return _mac(key, channel, view[:end - MAC_BYTES])

@@ -180,7 +180,7 @@ class AgentNode(Node):
                                             WORLD, self.limits.step, sender=WORLD_SENDER),
                       *radio_in]
         # world_sim starts step 1 once these writers have matched every reader of the run.
-        self.ready = ReadyAnnouncer(self, inputs, self.answer_pubs)
+        self.ready = ReadyAnnouncer(self, inputs, self.answer_pubs, key=key)
         steady_timer(self, 0.05, self._check_wait_timeout)
         self.get_logger().info(f'agent {self.agent_id} ready')
 

@@ -23,19 +23,30 @@ as the announced nodes (and world_sim itself) that read its topic: ``unmet`` say
 still missing.
 A reader that is not announced (``ros2 topic echo``) is not waited for; one that is counted in
 its place would let a writer pass with one announced reader unmatched.
-The topic is not signed (its readers start before any key could be checked), so world_sim takes
-an announcement only through ``parse``: bounded in size, JSON of exactly that shape (a deep or
-ill-typed one used to escape the callback and end world_sim, session 73); it keeps at most
-EXTRA_ANNOUNCERS nodes besides the agents and observers, and none after the start (each
-malformed one is counted as ``bad_announcement``, before or after).
+The topic is a standard type (std_msgs/String), so with the run's key a node publishes its
+announcement in an envelope (``seal``): ``{"signed": <the announcement's JSON>, "counter": n,
+"mac": <hex>}``, the MAC (message_auth.text_mac) over the topic, the node's counter (a
+MonotonicCounter, increasing across restarts) and the text. world_sim with a key takes only
+envelopes whose MAC verifies (``unseal``), and from each node only a counter above the last it
+took: a forged announcement could otherwise start the run before an observer was ready (its
+metrics would then lack a step and the run exit non-zero), and a replayed older one, with
+fewer matched readers, hold the start until the start-up timeout. Without a key announcements
+are the plain JSON, and anyone's is taken. Either way world_sim reads the announcement only
+through ``parse``: bounded in size, JSON of exactly that shape (a deep or ill-typed one used to
+escape the callback and end world_sim, session 73); it keeps at most EXTRA_ANNOUNCERS nodes
+besides the agents and observers, and none after the start. Each refused one is counted under
+its reason (``bad_announcement``, ``unsigned``, ``bad_signature``, ``replayed``), before the
+start or after.
 """
 
+import hmac
 import json
-from typing import Iterable, List, Mapping
+from typing import Iterable, List, Mapping, Optional, Tuple
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
 
+from sat_agent.message_auth import MonotonicCounter, text_mac
 from sat_agent.ros.node_runner import steady_timer
 
 TOPIC = '/world/ready'
@@ -52,7 +63,51 @@ EXTRA_ANNOUNCERS = 64
 
 
 class AnnouncementError(ValueError):
-    """An announcement that is not the JSON of ``announcement`` (the message says why)."""
+    """An announcement world_sim refuses: the reason it is counted under, and why."""
+
+    def __init__(self, detail: str, reason: str = 'bad_announcement'):
+        super().__init__(detail)
+        self.reason = reason
+
+
+def _json(text: str):
+    """Return the JSON value of text, bounded in size and depth (AnnouncementError if not)."""
+    if len(text) > MAX_ANNOUNCEMENT_BYTES:
+        raise AnnouncementError(f'{len(text)} characters, more than {MAX_ANNOUNCEMENT_BYTES}')
+    try:
+        return json.loads(text)
+    except (ValueError, RecursionError) as error:
+        raise AnnouncementError(f'not JSON: {type(error).__name__}') from None
+
+
+def seal(text: str, key: Optional[bytes], counter: MonotonicCounter) -> str:
+    """Return what a node publishes for announcement text: its envelope, or text without a key."""
+    if key is None:
+        return text
+    taken = counter.take()
+    return json.dumps({'signed': text, 'counter': taken,
+                       'mac': text_mac(key, TOPIC, text, taken)})
+
+
+def unseal(data: str, key: Optional[bytes]) -> Tuple[str, Optional[int]]:
+    """Return (announcement text, counter) of what a node published (counter None: no key).
+
+    Raises AnnouncementError: ``unsigned`` for anything but an envelope when there is a key,
+    ``bad_signature`` for an envelope whose MAC does not verify, ``bad_announcement`` for text
+    too long or not JSON.
+    """
+    if key is None:
+        return data, None
+    envelope = _json(data)
+    if not (isinstance(envelope, dict) and set(envelope) == {'signed', 'counter', 'mac'}
+            and isinstance(envelope['signed'], str) and isinstance(envelope['mac'], str)
+            and isinstance(envelope['counter'], int) and not isinstance(envelope['counter'], bool)
+            and 0 <= envelope['counter'] < 2 ** 64):
+        raise AnnouncementError('not a signed announcement', 'unsigned')
+    text, counter = envelope['signed'], envelope['counter']
+    if not hmac.compare_digest(envelope['mac'], text_mac(key, TOPIC, text, counter)):
+        raise AnnouncementError('its MAC does not verify', 'bad_signature')
+    return text, counter
 
 
 def parse(text: str) -> dict:
@@ -62,12 +117,7 @@ def parse(text: str) -> dict:
     nests too deep for the parser), or JSON of another shape: ``node`` a string, ``reads`` a list
     of strings, ``writes`` a mapping of strings to counts >= 0, ``observer`` (optional) a bool.
     """
-    if len(text) > MAX_ANNOUNCEMENT_BYTES:
-        raise AnnouncementError(f'{len(text)} characters, more than {MAX_ANNOUNCEMENT_BYTES}')
-    try:
-        announced = json.loads(text)
-    except (ValueError, RecursionError) as error:
-        raise AnnouncementError(f'not JSON: {type(error).__name__}') from None
+    announced = _json(text)
     if not isinstance(announced, dict) or not isinstance(announced.get('node'), str):
         raise AnnouncementError('not a mapping with a string "node"')
     reads, writes = announced.get('reads'), announced.get('writes')
@@ -87,6 +137,34 @@ def announcement(node_name: str, reads: Iterable[str], writes: Mapping[str, int]
     """Return the JSON text a node announces (module docstring)."""
     text = {'node': node_name, 'reads': sorted(set(reads)), 'writes': dict(sorted(writes.items()))}
     return json.dumps(dict(text, observer=True) if observer else text)
+
+
+class Announcements(dict):
+    """world_sim's record of the announcements: node name -> its last one (parsed JSON).
+
+    It keeps at most ``room`` nodes, so forged names cannot fill memory, and with a key a node's
+    announcement only if its counter is above the last one taken from that node.
+    """
+
+    def __init__(self, room: int):
+        super().__init__()
+        self.room = room
+        self._counters = {}      # node name -> counter of its last announcement taken
+
+    def take(self, announced: Mapping, counter: Optional[int]) -> Optional[Tuple[str, str]]:
+        """Keep an announcement (``parse``d; counter None without a key), or return why not.
+
+        Returns (reason, detail) for one refused: ``replayed`` (a counter not above the node's
+        last), ``too_many_announcers`` (a new node past ``room``).
+        """
+        name = announced['node']
+        if counter is not None and counter <= self._counters.get(name, -1):
+            return 'replayed', f'{name} counter {counter}, last {self._counters[name]}'
+        if name not in self and len(self) >= self.room:
+            return 'too_many_announcers', f'{name} past {self.room} nodes'
+        self[name] = announced
+        self._counters[name] = -1 if counter is None else counter
+        return None
 
 
 def is_agent(announced: Mapping, agent_id: int) -> bool:
@@ -129,12 +207,14 @@ class ReadyAnnouncer:
 
     subscriptions: those the node reads the run through (each must have a publisher first);
     publishers: the node's writers whose matched readers world_sim checks; observer: the node
-    is an observer even if it writes an agent's commands.
+    is an observer even if it writes an agent's commands; key: the run's key, to sign with.
     """
 
     def __init__(self, node, subscriptions, publishers=(), period: float = CHECK_PERIOD_S,
-                 observer: bool = False):
+                 observer: bool = False, key: Optional[bytes] = None):
         self._node = node
+        self._key = key
+        self._counter = MonotonicCounter()
         self._subscriptions = list(subscriptions)
         self._publishers = list(publishers)
         self._observer = observer
@@ -150,7 +230,7 @@ class ReadyAnnouncer:
                             {p.topic_name: p.get_subscription_count() for p in self._publishers},
                             self._observer)
         if text != self._announced:
-            self._publisher.publish(String(data=text))
+            self._publisher.publish(String(data=seal(text, self._key, self._counter)))
             self._announced = text
         if not self._publishers:
             self.stop()

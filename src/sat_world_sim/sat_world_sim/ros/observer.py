@@ -110,4 +110,4 @@ def watch_run(node, params, run, add) -> Watch:
     subscriptions = [inputs.subscribe(cls, topic, lambda msg, topic=topic: add(topic, msg), qos,
                                       content=content, **signature_of(topic, limits))
                      for topic, cls, qos, content in topics]
-    return Watch(inputs, ReadyAnnouncer(node, subscriptions))
+    return Watch(inputs, ReadyAnnouncer(node, subscriptions, key=inputs.verifier.key))

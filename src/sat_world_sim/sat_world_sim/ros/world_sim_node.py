@@ -144,7 +144,9 @@ class WorldSimNode(Node):
         self._deadline = None
         self._last_tick = None
         self._started = False
-        self._announcements = {}      # node name -> its last start-up announcement
+        # Each node's last start-up announcement, by node name.
+        self._announcements = readiness.Announcements(
+            len(self.ids) + self.observers + readiness.EXTRA_ANNOUNCERS)
         self._finished_at = None
         self._last_view_step = None
 
@@ -187,22 +189,21 @@ class WorldSimNode(Node):
     def on_announcement(self, msg: String):
         """Keep each node's last start-up announcement (sat_agent.ros.readiness).
 
-        Every one is checked (a malformed one is counted); they are kept only until the run
-        starts, and for at most the agents, the observers and readiness.EXTRA_ANNOUNCERS nodes.
+        Every one is checked (a malformed, unsigned or badly signed one is counted); they are
+        kept only until the run starts, and for at most the agents, the observers and
+        readiness.EXTRA_ANNOUNCERS nodes; with a key, each node's only while its counter grows.
         """
         try:
-            announced = readiness.parse(msg.data)
+            text, counter = readiness.unseal(msg.data, self.inputs.verifier.key)
+            announced = readiness.parse(text)
         except readiness.AnnouncementError as error:
-            self.guard.drop('bad_announcement', f'{readiness.TOPIC}: {error}')
+            self.guard.drop(error.reason, f'{readiness.TOPIC}: {error}')
             return
         if self._started:
             return
-        name = announced['node']
-        room = len(self.ids) + self.observers + readiness.EXTRA_ANNOUNCERS
-        if name not in self._announcements and len(self._announcements) >= room:
-            self.guard.drop('too_many_announcers', f'{readiness.TOPIC}: {name} past {room} nodes')
-            return
-        self._announcements[name] = announced
+        refused = self._announcements.take(announced, counter)
+        if refused is not None:
+            self.guard.drop(refused[0], f'{readiness.TOPIC}: {refused[1]}')
 
     def _unmet(self):
         """Return what keeps step 1 from starting (sat_agent.ros.readiness).
