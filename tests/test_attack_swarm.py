@@ -94,7 +94,11 @@ def attack(hostile, sent, k, key):
                 (' ' * (readiness.MAX_ANNOUNCEMENT_BYTES + 1), 'bad_announcement'),
                 ('{"node": "/x", "reads": [["/t"]], "writes": {}}', 'unsigned'),
                 (forged, 'unsigned'),
-                (readiness.seal(forged, bytes(32), MonotonicCounter()), 'bad_signature')):
+                (readiness.seal(forged, bytes(32), MonotonicCounter()), 'bad_signature'),
+                # Each of these ended world_sim before its MAC was checked (session 74's review).
+                ('{"signed": "\\ud800", "counter": 1, "mac": "' + '0' * 64 + '"}',
+                 'bad_announcement'),
+                ('{"signed": "x", "counter": 1, "mac": "\u00e9"}', 'unsigned')):
             hostile.send(readiness.TOPIC, String, serialize_message(String(data=text)),
                          readiness.QOS)
             sent[(WORLD, reason)] += 1

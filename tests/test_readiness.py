@@ -101,6 +101,7 @@ def test_an_announcement_parses_back_to_what_was_announced():
     '{"node": "/x", "reads": [], "writes": {"/t": 1.5}}',
     '{"node": "/x", "reads": [], "writes": [], "observer": true}',
     '{"node": "/x", "reads": [], "writes": {}, "observer": "yes"}',
+    '{"node": "\\ud800", "reads": [], "writes": {}}',  # no UTF-8: rclpy's logger raised
 ])
 def test_a_malformed_announcement_is_refused_with_its_reason(text):
     with pytest.raises(AnnouncementError):
@@ -114,8 +115,10 @@ def test_with_a_key_an_announcement_travels_signed_and_opens_to_its_text():
     assert json.loads(sealed)['signed'] == text
     assert unseal(sealed, KEY) == (text, 41)
     assert unseal(seal(text, KEY, counter), KEY) == (text, 42)
-    # Without a key both sides use the plain text.
+    # Without a key both sides use the plain text; an envelope (nodes with a key, world_sim
+    # without) gives its text unverified.
     assert seal(text, None, counter) == text and unseal(text, None) == (text, None)
+    assert unseal(sealed, None) == (text, None)
 
 
 def envelope(**change) -> str:
@@ -135,8 +138,11 @@ def envelope(**change) -> str:
     (envelope(counter=8), 'bad_signature'),          # the counter is signed too
     (envelope(signed=announcement('/fake', [], {'/agent_1/cmd': 9})), 'bad_signature'),
     (seal(announcement('/fake', [], {}), bytes(32), MonotonicCounter()), 'bad_signature'),
+    (envelope(mac='\u00e9' * 64), 'unsigned'),        # compare_digest raised TypeError
+    (envelope(mac='AB' * 32), 'unsigned'),
     ('[' * 1000, 'bad_announcement'),
     (' ' * (MAX_ANNOUNCEMENT_BYTES + 1), 'bad_announcement'),
+    ('{"signed": "\\ud800", "counter": 1, "mac": "' + '0' * 64 + '"}', 'bad_announcement'),
 ])
 def test_with_a_key_anything_but_a_verified_envelope_is_refused_with_its_reason(data, reason):
     with pytest.raises(AnnouncementError) as error:

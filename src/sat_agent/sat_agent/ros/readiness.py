@@ -41,6 +41,7 @@ start or after.
 
 import hmac
 import json
+import re
 from typing import Iterable, List, Mapping, Optional, Tuple
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -60,6 +61,8 @@ MAX_ANNOUNCEMENT_BYTES = 256 * 1024
 # Nodes kept besides the agents and the observers world_sim waits for (a test's scripted nodes,
 # several nodes of one process); the rest are dropped, so forged names cannot fill memory.
 EXTRA_ANNOUNCERS = 64
+# An envelope's MAC: message_auth.text_mac's hex digest.
+_HEX_MAC = re.compile('[0-9a-f]{64}')
 
 
 class AnnouncementError(ValueError):
@@ -71,13 +74,27 @@ class AnnouncementError(ValueError):
 
 
 def _json(text: str):
-    """Return the JSON value of text, bounded in size and depth (AnnouncementError if not)."""
+    """Return the JSON value of text, bounded in size and depth (AnnouncementError if not).
+
+    Its strings must be text: JSON can escape a lone surrogate (U+D800 alone), which no UTF-8
+    encoder and so no rclpy log line takes (a node name logged would end world_sim).
+    """
     if len(text) > MAX_ANNOUNCEMENT_BYTES:
         raise AnnouncementError(f'{len(text)} characters, more than {MAX_ANNOUNCEMENT_BYTES}')
     try:
-        return json.loads(text)
-    except (ValueError, RecursionError) as error:
-        raise AnnouncementError(f'not JSON: {type(error).__name__}') from None
+        value = json.loads(text)
+        json.dumps(value, ensure_ascii=False).encode()
+    except (ValueError, RecursionError) as error:   # UnicodeEncodeError is a ValueError
+        raise AnnouncementError(f'not JSON text: {type(error).__name__}') from None
+    return value
+
+
+def _is_envelope(value) -> bool:
+    return (isinstance(value, dict) and set(value) == {'signed', 'counter', 'mac'}
+            and isinstance(value['signed'], str)
+            and isinstance(value['mac'], str) and _HEX_MAC.fullmatch(value['mac']) is not None
+            and isinstance(value['counter'], int) and not isinstance(value['counter'], bool)
+            and 0 <= value['counter'] < 2 ** 64)
 
 
 def seal(text: str, key: Optional[bytes], counter: MonotonicCounter) -> str:
@@ -94,15 +111,13 @@ def unseal(data: str, key: Optional[bytes]) -> Tuple[str, Optional[int]]:
 
     Raises AnnouncementError: ``unsigned`` for anything but an envelope when there is a key,
     ``bad_signature`` for an envelope whose MAC does not verify, ``bad_announcement`` for text
-    too long or not JSON.
+    too long or not JSON. Without a key nothing can be verified: an envelope (from nodes that
+    have a key, world_sim not) gives its text, anything else is the text.
     """
-    if key is None:
-        return data, None
     envelope = _json(data)
-    if not (isinstance(envelope, dict) and set(envelope) == {'signed', 'counter', 'mac'}
-            and isinstance(envelope['signed'], str) and isinstance(envelope['mac'], str)
-            and isinstance(envelope['counter'], int) and not isinstance(envelope['counter'], bool)
-            and 0 <= envelope['counter'] < 2 ** 64):
+    if key is None:
+        return (envelope['signed'] if _is_envelope(envelope) else data), None
+    if not _is_envelope(envelope):
         raise AnnouncementError('not a signed announcement', 'unsigned')
     text, counter = envelope['signed'], envelope['counter']
     if not hmac.compare_digest(envelope['mac'], text_mac(key, TOPIC, text, counter)):
