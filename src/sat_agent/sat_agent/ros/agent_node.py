@@ -259,9 +259,10 @@ class AgentNode(Node):
         unsigned too.
         """
         now = self.get_clock().now().nanoseconds
-        if now and step > step_at(0, now, self.dt) + MAX_CLOCK_LEAD:
-            raise InvalidMessage('future_step', "stamped ahead of this node's clock "
-                                 f'(step {step_at(0, now, self.dt)})')
+        clock_step = step_at(0, now, self.dt)
+        if now and step > clock_step + MAX_CLOCK_LEAD:
+            raise InvalidMessage('future_step', f"stamped ahead of this node's clock (step "
+                                 f'{clock_step})')
 
     def _take_scan(self, kind: str, step: int, scan, deliveries: int):
         self.guard.accept(kind)
