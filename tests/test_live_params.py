@@ -10,9 +10,11 @@ live parameters are read-only too.
 
 from pathlib import Path
 import re
+import time
 
 from geometry_msgs.msg import PoseStamped
 import pytest
+import rclpy
 from rclpy.parameter import Parameter, parameter_value_to_python
 from rclpy.parameter_client import AsyncParameterClient
 from ros_harness import (executable, PARAMS, ros_node, scaled, spin_until, started, wait_for_text,
@@ -28,14 +30,32 @@ from sat_msgs.msg import RadioTraffic
 # Bounds (scaled by SAT_TEST_TIMEOUT_SCALE): a node's start-up, a parameter service's answer.
 START_S = 60.0
 ANSWER_S = 30.0
+# An unanswered request is sent again after this: Fast DDS drops a service's response if the
+# server has not matched the client's response reader within 100 ms ("client will not receive
+# response"), which a loaded machine exceeds (CI lost a first describe so). Every request here
+# is idempotent: describe, get, list, or set of one value.
+RESEND_S = 5.0
 # Steps watched after a change.
 WATCH_STEPS = 4
 
 
-def call(node, future, what: str):
-    """Spin node until future is done; return its result."""
-    spin_until(node, future.done, ANSWER_S, what)
-    return future.result()
+def call(node, send, what: str):
+    """Return the answer to send()'s request (send returns its future), sent again if unanswered.
+
+    An answer to any of the copies counts.
+    """
+    futures = []
+    deadline = time.monotonic() + scaled(ANSWER_S)
+    while time.monotonic() < deadline:
+        futures.append(send())
+        resend_at = min(deadline, time.monotonic() + scaled(RESEND_S))
+        while time.monotonic() < resend_at:
+            answered = [future for future in futures if future.done()]
+            if answered:
+                return answered[0].result()
+            rclpy.spin_once(node, timeout_sec=0.1)
+    raise AssertionError(f'{what}: no answer to {len(futures)} requests in '
+                         f'{scaled(ANSWER_S):g} s (SAT_TEST_TIMEOUT_SCALE scales it)')
 
 
 def services(node, name: str) -> AsyncParameterClient:
@@ -47,8 +67,8 @@ def services(node, name: str) -> AsyncParameterClient:
 
 def set_one(node, client, name, value):
     """Set one parameter; return its SetParametersResult."""
-    future = client.set_parameters([Parameter(name, value=value)])
-    return call(node, future, f'set {name}').results[0]
+    return call(node, lambda: client.set_parameters([Parameter(name, value=value)]),
+                f'set {name}').results[0]
 
 
 def assert_refused(node, client, name, value, reason: str):
@@ -72,7 +92,7 @@ def change_step(log: Path, node_name: str, name: str, processes) -> int:
 
 def get_one(node, client, name):
     """Get one parameter's value (rclpy's Parameter value)."""
-    answer = call(node, client.get_parameters([name]), f'get {name}')
+    answer = call(node, lambda: client.get_parameters([name]), f'get {name}')
     return parameter_value_to_python(answer.values[0])
 
 
@@ -83,7 +103,7 @@ def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_pat
                '--params-file', str(PARAMS), '-p', 'agent_id:=1', '-p', f'{LIVE_SWITCH}:=true']
     with ros_node('param_test_client') as node, started(command, tmp_path / 'agent.log') as agent:
         client = services(node, '/agent_1/agent')
-        described = call(node, client.describe_parameters(
+        described = call(node, lambda: client.describe_parameters(
             ['sensor.p_detect', 'search.investigate_steps', 'search.policy']),
             'describe').descriptors
         p_detect, budget, policy = described
@@ -95,7 +115,7 @@ def test_agent_parameters_are_described_refused_with_a_reason_or_applied(tmp_pat
         assert "'thompson'" in policy.additional_constraints and policy.read_only
         names = {name for schema in (SatParams, AgentNodeParams)
                  for name, _, _ in leaves(schema)}
-        listed = call(node, client.list_parameters(), 'list').result.names
+        listed = call(node, client.list_parameters, 'list').result.names
         assert names <= set(listed)
 
         assert_refused(node, client, 'sensor.p_detect', 5.0, 'read-only')
@@ -189,8 +209,8 @@ def test_live_changes_cut_the_radio_links_and_stop_an_agents_views(tmp_path):
         locked = services(node, '/agent_2/agent')
         for name, value in (('view_rate', 0.0), ('world_timeout', 1e-6)):
             assert_refused(node, locked, name, value, 'read-only')
-            assert call(node, locked.describe_parameters([name]), 'describe').descriptors[0] \
-                .read_only
+            described = call(node, lambda: locked.describe_parameters([name]), 'describe')
+            assert described.descriptors[0].read_only
         assert get_one(node, locked, 'world_timeout') == 60.0
         assert_refused(node, locked, 'use_sim_time', True,
                        f"'use_sim_time' is read-only while the node runs (started without "
