@@ -4,8 +4,8 @@
 bytes on any topic (garbage, forged messages, replays of genuine ones it captured) and, as an
 insider, can sign with the run's key. ``Diagnostics`` reads what the nodes count on
 /diagnostics. ``signed_swarm`` starts world_sim, the metrics node, optionally the recorder
-and the logger, and two agents, all with one key file; the test node is one more observer the
-world waits for, so every attack can be timed on the steps it sees.
+and the logger, and two agents, all with one key file and run id RUN_ID; the test node is one
+more observer the world waits for, so every attack can be timed on the steps it sees.
 """
 
 from contextlib import contextmanager, ExitStack
@@ -19,9 +19,11 @@ from rclpy.serialization import deserialize_message, serialize_message
 from ros_harness import announce, executable, PARAMS, spin_until, started, write_scenario
 import yaml
 
-from sat_agent.message_auth import create_key_file, load_key, Signer
+from sat_agent.message_auth import create_key_file, load_key, run_key, Signer
 
 DEPTH = 300
+# The attacked runs' id: their key is run_key(the key file's, RUN_ID).
+RUN_ID = 'attacked-run'
 RELIABLE = QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -102,7 +104,7 @@ def signed_swarm(tmp_path: Path, scenario: Path, steps: int, key_file: Optional[
     process. Everything is stopped at the end.
     """
     run_dir = tmp_path / 'run'
-    key = ('-p', f'auth_key_file:={key_file}') if key_file else ()
+    key = ('-p', f'auth_key_file:={key_file}', '-p', f'auth_run_id:={RUN_ID}') if key_file else ()
     params = ('--ros-args', '--params-file', str(PARAMS), *key, *extra)
     # world_sim and the agents draw from the scenario's seed, as in the bring-up.
     seed = ('-p', f"seed:={yaml.safe_load(scenario.read_text())['seed']}")
@@ -139,7 +141,7 @@ def run_attacked(node, hostile, tmp_path: Path, scenario: Path, steps: int, key_
         # writes an agent's commands (a hijack), or world_sim would wait for the observer it is
         # not and start only at its start-up timeout.
         announce(node, watched, [hostile.publisher(*target) for target in targets],
-                 observer=True, key=load_key(key_file))
+                 observer=True, key=run_key(load_key(key_file), RUN_ID))
         spin_until(node, lambda: all(p.poll() is not None for p in processes.values()), 240,
                    'the attacked run ended', processes.values())
         spin_until(node, lambda: diagnostics.final(*final_from), 30,
@@ -153,10 +155,11 @@ def new_key(tmp_path: Path) -> Path:
 
 
 def attack_setup(tmp_path_factory, name: str, seed: int, steps: int):
-    """Return (tmp_path, scenario, key_file, key) of one attacked run (near_scenario)."""
+    """Return (tmp_path, scenario, key_file, the run's key) of one attacked run (near_scenario)."""
     tmp_path = tmp_path_factory.mktemp(name)
     key_file = new_key(tmp_path)
-    return tmp_path, near_scenario(tmp_path, seed, steps), key_file, load_key(key_file)
+    return (tmp_path, near_scenario(tmp_path, seed, steps), key_file,
+            run_key(load_key(key_file), RUN_ID))
 
 
 def near_scenario(tmp_path: Path, seed: int, steps: int) -> Path:

@@ -3,8 +3,8 @@
 A scan is taken only if it is this agent's, of a new step and of finite, in-range content. A
 signed scan refused by those checks must not advance the world's replay counter, or a key
 holder's bad scan sent with the next counter would make the genuine scan it races a replay.
-A robot's scans are unsigned: one stamped far ahead of the agent's clock must not lock out the
-genuine ones that follow.
+A scan signed for another run under the same key is refused. A robot's scans are unsigned: one
+stamped far ahead of the agent's clock must not lock out the genuine ones that follow.
 """
 
 import math
@@ -16,7 +16,7 @@ from rclpy.serialization import serialize_message
 from ros_harness import ros_node
 from sensor_msgs.msg import PointCloud2, PointField
 
-from sat_agent.message_auth import MonotonicCounter, Signer, WORLD_SENDER
+from sat_agent.message_auth import MonotonicCounter, run_key, Signer, WORLD_SENDER
 from sat_agent.ros.agent_node import AgentNode
 from sat_agent.stamps import MAP_FRAME
 from sat_msgs.msg import MeasurementSet, RangeBearing
@@ -74,6 +74,25 @@ def test_a_signed_scan_refused_for_its_content_does_not_block_the_genuine_one(ke
             # Taken, it moved the counter: sent again, it is a replay.
             deliver(signed(key, 11, scan(3)))
             assert agent.guard.dropped['replayed'] == 1 and agent.last_step == 2
+        finally:
+            agent.destroy_node()
+
+
+def test_a_scan_of_another_run_under_the_same_key_is_refused(key_file):
+    # A key file reused across runs: the agent of run 'mission-b' gets run 'mission-a''s
+    # recorded scan of the same step first.
+    key = key_file.read_bytes()
+    with ros_node('scan_of_another_run'):
+        agent = AgentNode(namespace=f'/agent_{AGENT}', parameter_overrides=[
+            Parameter('agent_id', value=AGENT), Parameter('auth_key_file', value=str(key_file)),
+            Parameter('auth_run_id', value='mission-b'), Parameter('agent_ids', value=[AGENT])])
+        try:
+            deliver = subscription(agent, CHANNEL).callback
+            deliver(signed(run_key(key, 'mission-a'), 10, scan(1, bearing=1.0)))
+            deliver(signed(key, 11, scan(1, bearing=1.0)))    # nor one signed with the key itself
+            assert agent.guard.dropped == {'bad_signature': 2} and agent.last_step == 0
+            deliver(signed(run_key(key, 'mission-b'), 5, scan(1)))
+            assert agent.last_step == 1 and agent.guard.accepted['measurements'] == 1
         finally:
             agent.destroy_node()
 

@@ -3,7 +3,8 @@
 One short lock-step run of two agents in radio range, with a key, attacked from the test
 process (hostile.py) at the steps it sees agent 1's scans: a command hijack (unsigned, with
 a wrong key, and replays of agent 1's genuine commands), a step jump (scans of step k + 999),
-phantom scans (ten forged detections near a fake target, from a wrong key), agent 2's genuine
+phantom scans (ten forged detections near a fake target, from a wrong key, and scans as a
+recording of another run under the same key would hold them, session 75), agent 2's genuine
 reports published straight on agent 1's inbox, an unknown agent 99 (without the key, and as
 an insider with a valid world seal), replays of a genuine /world/step and of a genuine
 delivery, and malformed start-up announcements on /world/ready (JSON nested past the parser's
@@ -25,8 +26,8 @@ from ros_harness import ros_node
 from std_msgs.msg import String
 from test_swarm_ros import inprocess_metrics
 
-from sat_agent.message_auth import (AuthError, MessageVerifier, MonotonicCounter, Signer,
-                                    StepWindow, WORLD_SENDER)
+from sat_agent.message_auth import (AuthError, load_key, MessageVerifier, MonotonicCounter,
+                                    run_key, Signer, StepWindow, WORLD_SENDER)
 from sat_agent.ros import readiness
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import AgentMode, ControlCommand, MeasurementSet, RangeBearing, WorldStep
@@ -57,8 +58,8 @@ def scan(step, detections=()):
                           detections=[RangeBearing(range=r, bearing=b) for r, b in detections])
 
 
-def attack(hostile, sent, k, key):
-    """Everything sent at agent 1's scan of step k."""
+def attack(hostile, sent, k, key, other_run):
+    """Everything sent at agent 1's scan of step k (other_run: another run's key, same file)."""
     topic = '/agent_1/measurements'
     if k in HIJACK:
         hijack(hostile, sent, k, key)
@@ -68,7 +69,8 @@ def attack(hostile, sent, k, key):
     if k in PHANTOM:
         phantom = scan(k + 1, [(2.0 + 0.01 * i, 0.5) for i in range(10)])
         hostile.send(topic, MeasurementSet, forge(phantom, topic, k + 1, 0, bytes(32)))
-        sent[(AGENT_1, 'bad_signature')] += 1
+        hostile.send(topic, MeasurementSet, forge(phantom, topic, k + 1, 0, other_run))
+        sent[(AGENT_1, 'bad_signature')] += 2
     if k == 7:
         # Agent 2's genuine reports of the last step, straight on agent 1's inbox: no seal.
         for kind, cls in (('mode', AgentMode),):
@@ -116,6 +118,7 @@ def attack(hostile, sent, k, key):
 def attacked(tmp_path_factory):
     """Run the attacked swarm once; return (metrics, expected metrics, sent, diagnostics)."""
     tmp_path, scenario, key_file, key = attack_setup(tmp_path_factory, 'attacked', 3, STEPS)
+    other_run = run_key(load_key(key_file), 'the-run-before')
     sent = Counter()
     with ros_node('hostile') as node:
         hostile = Hostile(node)
@@ -130,7 +133,8 @@ def attacked(tmp_path_factory):
             sent[(WORLD, 'unsigned')] += 1
             return [hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
                                     lambda data: genuine_scan(data, key)
-                                    and attack(hostile, sent, scan_step(data), key)),
+                                    and attack(hostile, sent, scan_step(data), key,
+                                               other_run)),
                     hostile.capture('/agent_1/cmd', ControlCommand,
                                     keep=lambda data: genuine(data, key, '/agent_1/cmd', 1)),
                     hostile.capture(radio_topic(2, 'out', 'mode'), AgentMode),
@@ -195,9 +199,10 @@ def test_a_scan_from_the_far_future_is_refused_and_the_agent_keeps_stepping(atta
 
 
 def test_phantom_scans_are_refused_and_leave_no_phantom_estimate(attacked):
+    # Each phantom comes twice: with a wrong key, and signed for another run under the key.
     metrics, expected, sent, diagnostics = attacked
     assert diagnostics.dropped(AGENT_1, 'bad_signature') == sent[(AGENT_1, 'bad_signature')] \
-        == len(PHANTOM)
+        == 2 * len(PHANTOM)
     assert metrics['steps'] == expected['steps']
 
 

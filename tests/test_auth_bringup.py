@@ -2,6 +2,8 @@
 
 import os
 from pathlib import Path
+import re
+import shutil
 import stat
 import subprocess
 import sys
@@ -9,7 +11,9 @@ import time
 
 import pytest
 from ros_harness import executable, REPO, run_swarm
+from test_launch_parity import LAUNCH_FILE, load_module
 
+from sat_agent.message_auth import create_key_file
 from sat_world_sim import bringup
 
 PAPER = REPO / 'config' / 'scenarios' / 'paper.yaml'
@@ -70,20 +74,89 @@ def test_no_auth_and_a_key_file_together_are_refused(tmp_path):
         bringup.check_auth(options('--no-auth', '--key-file', str(tmp_path / 'k')))
 
 
+def run_ids(opts) -> set:
+    """Return the auth_run_id values the processes of opts get."""
+    return {arg.split(':=', 1)[1] for p in bringup.process_list(opts, [1, 2], 1)
+            for arg in p.ros_arguments if arg.startswith('auth_run_id:=')}
+
+
+def test_every_signed_run_gets_a_new_id_and_every_process_the_same():
+    first, second = options('--key-file', '/some/key'), options('--key-file', '/some/key')
+    for opts in (first, second):
+        bringup.run_identity(opts)
+        assert len(run_ids(opts)) == 1 and re.fullmatch('[0-9a-f]{32}', opts.run_id)
+        assert all('auth_run_id:=' in ' '.join(p.ros_arguments)
+                   for p in bringup.process_list(opts, [1, 2], 1))
+    assert first.run_id != second.run_id
+    chosen = options('--key-file', '/some/key', '--run-id', 'mission-7')
+    bringup.run_identity(chosen)
+    assert run_ids(chosen) == {'mission-7'}
+    # The bring-up's own key gets one too (run_identity runs before run_key); no key, none.
+    own = options()
+    bringup.run_identity(own)
+    key_dir = bringup.run_key(own)
+    try:
+        assert run_ids(own) == {own.run_id}
+    finally:
+        shutil.rmtree(key_dir)
+    off = options('--no-auth')
+    bringup.run_identity(off)
+    assert off.run_id is None and not run_ids(off)
+
+
+def test_the_launch_gives_a_run_with_a_key_file_an_id_as_the_bring_up_does():
+    launch = load_module(LAUNCH_FILE, 'swarm_launch')
+    values = {'run_dir': 'runs/x', 'key_file': '/some/key'}
+    ids = [{arg for p in launch.processes(values)[0] for arg in p.ros_arguments
+            if arg.startswith('auth_run_id:=')} for _ in range(2)]
+    assert all(len(each) == 1 for each in ids) and ids[0] != ids[1]
+    processes, _ = launch.processes({**values, 'run_id': 'mission-7'})
+    chosen = options('--run-dir', 'runs/x', '--key-file', '/some/key', '--run-id', 'mission-7')
+    assert processes == bringup.load_run(bringup.parse_args(
+        ['--run-dir', 'runs/x', '--key-file', '/some/key', '--run-id', 'mission-7']))
+    assert run_ids(chosen) == {'mission-7'}
+
+
+@pytest.mark.parametrize('argv, problem', [
+    (('--no-auth', '--run-id', 'm1'), 'choose one'),
+    (('--run-id', 'a b'), 'allowed: 1 to 64'), (('--run-id', 'x:=y'), 'allowed: 1 to 64'),
+    (('--run-id', 'r' * 65), 'allowed: 1 to 64')])
+def test_a_bad_run_id_is_refused_naming_it(argv, problem):
+    with pytest.raises(bringup.RunIdError, match=problem):
+        bringup.run_identity(options(*argv))
+
+
+def test_a_bad_run_id_stops_the_bring_up_before_anything_starts(tmp_path):
+    run_dir = tmp_path / 'run'
+    result = subprocess.run(
+        [sys.executable, executable('sat_world_sim', 'swarm'), '--scenario', str(PAPER),
+         '--run-dir', str(run_dir), '--run-id', 'two words'],
+        capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert result.stderr.strip() == ("swarm: --run-id 'two words': allowed: 1 to 64 of the "
+                                     'characters A-Z a-z 0-9 . _ -'), result.stderr
+    assert not run_dir.exists()
+
+
 @pytest.mark.ros
 @pytest.mark.timeout(300)
 def test_the_paper_run_gives_the_same_metrics_with_authentication_on_and_off(tmp_path):
-    texts = {}
-    for name, flags in (('on', ()), ('off', ('--no-auth',))):
-        code, metrics, output = run_swarm(tmp_path / name, PAPER, '--steps', '40', '--no-view',
-                                          '--no-record', *flags)
-        assert code == 0, output[-3000:]
+    texts, outputs = {}, {}
+    key = str(create_key_file(tmp_path / 'swarm.key'))
+    # With a key file of yours every process must get the run's one id, or nothing verifies.
+    for name, flags in (('on', ()), ('off', ('--no-auth',)), ('own_key', ('--key-file', key))):
+        code, metrics, outputs[name] = run_swarm(tmp_path / name, PAPER, '--steps', '40',
+                                                 '--no-view', '--no-record', *flags)
+        assert code == 0, outputs[name][-3000:]
         assert metrics['dropped'] == {}
         texts[name] = (tmp_path / name / 'metrics.json').read_text()
         log = (tmp_path / name / 'logs' / 'agent_1.log').read_text()
         assert ('authentication is OFF' in log) == (name == 'off')
-    assert 'authentication is OFF' in output   # the bring-up's own warning
-    assert texts['on'] == texts['off']
+    assert 'authentication is OFF' in outputs['off']   # the bring-up's own warning
+    for name in ('on', 'own_key'):
+        assert re.search(r', run id [0-9a-f]{32}\n', outputs[name])
+    assert ', run id' not in outputs['off']
+    assert texts['on'] == texts['off'] == texts['own_key']
     # The run's key directory is gone; nothing of it is left in the run directory.
     assert not list((tmp_path / 'on').rglob('*.key'))
 

@@ -322,6 +322,35 @@ def test_an_old_delivery_replayed_later_is_refused():
     refused(lambda: v.verify_delivery(inbox(1), old, outbox), 'replayed')
 
 
+# -- runs -----------------------------------------------------------------------------------
+
+def test_a_recording_of_one_run_does_not_verify_in_another_run_under_the_same_key():
+    # A key reused across runs: each run's receivers start with fresh replay counters, so only
+    # the run's own key (run_key) keeps another run's recorded messages and seals out.
+    run_a, run_b = auth.run_key(KEY, 'mission-a'), auth.run_key(KEY, 'mission-b')
+    assert len({KEY, run_a, run_b}) == 3 and auth.run_key(KEY, '') == KEY
+    assert auth.run_key(KEY, 'mission-a') == run_a
+    recorded = Signer(run_a, 2).sign('/agent_2/cmd', payload(), 10)
+    assert verifier(10, key=run_a).verify('/agent_2/cmd', recorded).sender == 2
+    refused(lambda: verifier(10, key=run_b).verify('/agent_2/cmd', recorded), 'bad_signature')
+    refused(lambda: verifier(10).verify('/agent_2/cmd', recorded), 'bad_signature')
+    report = Signer(run_a, 2).sign(outbox(2), payload(relayed=True), 10, relayed=True)
+    delivery = Signer(run_a, WORLD_SENDER).seal(inbox(1), report, 10)
+    refused(lambda: verifier(10, key=run_b).verify_delivery(inbox(1), delivery, outbox),
+            'bad_signature')
+    assert auth.text_mac(run_a, '/world/ready', '{}', 1) != \
+        auth.text_mac(run_b, '/world/ready', '{}', 1)
+
+
+def test_a_key_parameter_gives_its_runs_key_and_no_file_gives_none(tmp_path):
+    path = tmp_path / 'swarm.key'
+    path.write_bytes(KEY)
+    path.chmod(0o600)
+    assert auth.key_from_parameter(str(path)) == KEY
+    assert auth.key_from_parameter(str(path), 'mission-a') == auth.run_key(KEY, 'mission-a')
+    assert auth.key_from_parameter('', 'mission-a') is None
+
+
 # -- off ------------------------------------------------------------------------------------
 
 def test_without_a_key_nothing_is_signed_and_everything_is_accepted_and_counted():

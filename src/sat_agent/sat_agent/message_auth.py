@@ -36,6 +36,13 @@ redirect to another topic or receiver, or replay a message: it can only read tra
 is encrypted), drop or delay it, flood receivers with messages that are refused and counted,
 and publish on topics that are not signed.
 
+**Runs.** A key may serve many runs (``--key-file``: one key copied to the machines of a
+swarm). Every MAC of a run is then made with that run's own key, ``run_key(key, run_id)``,
+HMAC of the key over the run's id (the node parameter ``auth_run_id``; the bring-up and the
+launch make a new one per run), so a recording of one run replayed into another under the same
+key does not verify (``bad_signature``); otherwise the receivers' replay counters, fresh in
+every run, would take it. An empty id signs with the key itself (a node warns).
+
 **Off switch.** With no key (``key is None``) a Signer leaves the tail zero and a
 MessageVerifier accepts everything, counting it as ``unauthenticated``; the node must log
 AUTH_OFF_WARNING. The bring-up always creates a key.
@@ -64,10 +71,15 @@ CDR_HEADER_BYTES = 4
 _ENDIAN = {b'\x00\x00': '>', b'\x00\x01': '<'}   # CDR_BE, CDR_LE
 # Separates these MACs from any other use of the key.
 _DOMAIN = b'sat-swarm auth v1\x00'
+# Separates a run's key (run_key) from the MACs made with the key itself.
+_RUN_DOMAIN = b'sat-swarm run v1\x00'
 AUTH_OFF_WARNING = ('message authentication is OFF (no auth key file given): any process on '
                     'this ROS domain can forge commands, scans, radio reports and world '
                     'messages. The bring-up creates a key for every run; pass one with '
                     '--key-file to share it across hosts.')
+NO_RUN_ID_WARNING = ('no auth_run_id: this node signs with the key itself, so a recording of '
+                     'another run under the same key and without an id would be taken; give '
+                     'every run a new id (the bring-up and the launch do)')
 
 
 def _block(order: str) -> struct.Struct:
@@ -178,9 +190,16 @@ def load_key(path) -> bytes:
     return key
 
 
-def key_from_parameter(key_file: str) -> Optional[bytes]:
-    """Return the key of a node's key-file parameter, or None (authentication off) for ''."""
-    return load_key(key_file) if key_file else None
+def run_key(key: bytes, run_id: str) -> bytes:
+    """Return the key one run signs with: HMAC-SHA256 of key over run_id ('' = key itself)."""
+    if not run_id:
+        return key
+    return hmac.new(key, _RUN_DOMAIN + run_id.encode(), hashlib.sha256).digest()
+
+
+def key_from_parameter(key_file: str, run_id: str = '') -> Optional[bytes]:
+    """Return run_id's key of a node's key-file parameter, or None (authentication off) for ''."""
+    return run_key(load_key(key_file), run_id) if key_file else None
 
 
 # -- the tail -------------------------------------------------------------------------------

@@ -29,6 +29,11 @@ class InputParams:
         '', "the run's swarm key file (sat_agent/message_auth.py: >= 32 random bytes, mode "
         "0600, owned by the node's user or root) to sign and verify messages with; '' = "
         'authentication off (warned)')
+    # Not secret: a run's id only makes its MACs its own (message_auth.run_key).
+    auth_run_id: str = param(
+        '', "the run's id, bound into every signature so that a recording of another run under "
+        'the same key is refused; every node of a run must have the same one (the bring-up '
+        "and the launch make one per run); '' = none (warned with a key)")
 
 
 @dataclass(frozen=True)

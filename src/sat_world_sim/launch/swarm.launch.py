@@ -6,7 +6,7 @@
 The launch arguments are the bring-up's run options (``ros2 launch ... --show-args`` lists
 them: scenario, params, run_dir, clock, period, agent_timeout, seed, steps, radio_loss,
 radio_delay, composed, respawn, record, view, view_rate, live_params, fastdds_profile,
-domain_id, key_file, no_auth), and the
+domain_id, key_file, run_id, no_auth), and the
 processes, their arguments and their environment come from the bring-up's own
 ``process_list`` and ``run_env`` (sat_world_sim.bringup): one source of truth, checked by
 tests/test_launch_parity.py. Every process runs with ``use_sim_time`` and the run's seed
@@ -15,7 +15,8 @@ observer (metrics, recorder, logger) has exited; the agents exit by themselves w
 says the run is finished.
 
 Authentication: the launch makes no key; give one with ``key_file:=<path>`` (0600, >= 32 random
-bytes), else every node runs without signatures and warns (README, "Trust model").
+bytes), else every node runs without signatures and warns (README, "Trust model"). With a key
+file every launch is a run with a new id (``run_id:=`` to choose it), as in the bring-up.
 
 ``processes(values)`` needs no launch package, so the process list can be checked (and run)
 where launch is not installed.
@@ -27,6 +28,7 @@ from sat_world_sim import bringup
 def processes(values):
     """Return (processes, extra environment) for launch argument values (name -> string)."""
     options = bringup.options_from_launch(values)
+    bringup.run_identity(options)
     return bringup.load_run(options), bringup.run_env(options.fastdds_profile, options.domain_id)
 
 

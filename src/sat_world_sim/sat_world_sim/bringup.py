@@ -20,8 +20,10 @@ into a private temporary directory (mode 0700, outside the run directory, so nei
 recorded run nor a copy of it carries the key) and deleted when the run ends; every process
 gets its path as the parameter ``auth_key_file``. ``--key-file`` uses a key file of your own
 instead (to run agents on several machines, each with a copy of it); it is checked before
-anything starts. ``--no-auth`` runs without authentication, with a loud warning in every
-process.
+anything starts. Every signed run gets a new id (``--run-id`` to choose it), passed to every
+process as ``auth_run_id``, that makes its signatures its own: a recording of another run under
+the same key is refused (sat_agent.message_auth.run_key). ``--no-auth`` runs without
+authentication, with a loud warning in every process.
 
 ``--netns`` (root only) places world_sim and the observers on one host and each agent process
 on its own: Linux network namespaces on a private bridge (sat_world_sim.netns), DDS over UDP
@@ -42,6 +44,8 @@ import argparse
 from dataclasses import dataclass, field
 import os
 from pathlib import Path
+import re
+import secrets
 import shlex
 import shutil
 import signal
@@ -67,6 +71,8 @@ MAX_RESPAWNS = 5
 # Options of the supervision only (not of the run): the launch file has no use for them.
 # (--netns places the processes itself; a launch file would use launch_ros's prefix.)
 SUPERVISION_OPTIONS = ('timeout', 'quiet', 'print_ros2_run', 'netns')
+# A run id goes on command lines (-p auth_run_id:=...): no spaces, quotes or ':='.
+RUN_ID = re.compile(r'[A-Za-z0-9._-]{1,64}')
 
 
 def executable(package: str, name: str) -> str:
@@ -219,6 +225,7 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     ``ros2 run`` of these lines is the same run as the bring-up's.
     """
     key = ('-p', f'auth_key_file:={options.key_file}') if options.key_file else ()
+    key += ('-p', f'auth_run_id:={options.run_id}') if key and options.run_id else ()
     params = ('--params-file', str(options.params), '-p', 'use_sim_time:=true', *key)
     # What world_sim and the agents share (node_params.SteppingParams).
     stepping = ('-p', f'view_rate:={options.view_rate}') if options.view_rate is not None else ()
@@ -340,6 +347,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="swarm key file (>= 32 random bytes, mode 0600, yours or root's) "
                              'to sign with, e.g. shared by the machines of one swarm (default: a '
                              'new key per run)')
+    parser.add_argument('--run-id', default=None,
+                        help="this run's id, bound into every signature so that a recording of "
+                             'another run under the same key is refused; give every machine of '
+                             'one run the same (1-64 of A-Z a-z 0-9 . _ -; default: a new one '
+                             'per run)')
     parser.add_argument('--netns', action='store_true',
                         help='world_sim and the observers on one network namespace, each agent '
                              'process on its own, DDS over UDP between them (root only)')
@@ -505,6 +517,24 @@ def check_auth(options):
         load_key(options.key_file)
 
 
+class RunIdError(ValueError):
+    """A --run-id that cannot be used; the message names it and what is allowed."""
+
+
+def run_identity(options):
+    """Check --run-id, or give a signed run a new one (module docstring). Raises RunIdError."""
+    if options.run_id is None:
+        if not options.no_auth:
+            options.run_id = secrets.token_hex(16)
+        return
+    if options.no_auth:
+        raise RunIdError(f'--no-auth and --run-id {options.run_id}: a run id binds signatures; '
+                         'choose one')
+    if not RUN_ID.fullmatch(options.run_id):
+        raise RunIdError(f'--run-id {options.run_id!r}: allowed: 1 to 64 of the characters '
+                         'A-Z a-z 0-9 . _ -')
+
+
 def run_key(options) -> Optional[Path]:
     """Create this run's key unless one was given or auth is off; return its private directory.
 
@@ -523,8 +553,9 @@ def main(argv=None) -> int:
     options = args if args.print_ros2_run else absolute(args)
     try:
         check_auth(options)
+        run_identity(options)
         check_netns(options)
-    except (KeyFileError, netns.NetnsError) as error:
+    except (KeyFileError, RunIdError, netns.NetnsError) as error:
         print(f'swarm: {error}', file=sys.stderr)
         return 2
     key_dir = None if args.print_ros2_run else run_key(options)
@@ -542,8 +573,9 @@ def main(argv=None) -> int:
         if options.no_auth:
             print(f'[swarm] WARNING: {AUTH_OFF_WARNING}', file=sys.stderr)
         agents = sum(p.executable == 'agent' for p in processes) or 'composed'
+        run_id = f', run id {options.run_id}' if options.run_id else ''
         print(f"[swarm] ROS_DOMAIN_ID={env['ROS_DOMAIN_ID']}: {agents} agents, "
-              f'{options.clock}, run dir {args.run_dir}', file=sys.stderr)
+              f'{options.clock}, run dir {args.run_dir}{run_id}', file=sys.stderr)
         code = run_on_hosts(processes, env, options)
     finally:
         if key_dir is not None:

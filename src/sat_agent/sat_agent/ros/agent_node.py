@@ -136,7 +136,7 @@ class AgentNode(Node):
         self.last_step = 0
         self.guard = InputGuard(self, f'agent_{self.agent_id}',
                                 self.node_params.diagnostics_period)
-        key = auth_key(self, self.node_params.auth_key_file)
+        key = auth_key(self, self.node_params)
         # The roster (the bring-up passes it); unset: any sender the relay sealed for us.
         roster = self.declare_parameter('agent_ids', Parameter.Type.INTEGER_ARRAY).value
         self.inputs = VerifiedInput(self, self.guard, key, roster,

@@ -2,10 +2,11 @@
 
 The maths is sat_agent.message_auth (ROS-free); this module moves bytes between it and rclpy:
 
-- ``auth_key(node, path)``: the key of the node parameter ``auth_key_file`` (a path, never the
+- ``auth_key(node, params)``: the key of the node parameter ``auth_key_file`` (a path, never the
   key itself: parameters are readable through services, command lines through /proc;
-  sat_agent.node_params). '' = authentication off, logged at WARN
-  (message_auth.AUTH_OFF_WARNING) and shown on /diagnostics.
+  sat_agent.node_params), made the run's own by ``auth_run_id`` (message_auth.run_key).
+  '' = authentication off, logged at WARN (message_auth.AUTH_OFF_WARNING) and shown on
+  /diagnostics.
 - ``SignedPublisher``: serializes a message with a zero ``auth`` and publishes the signed bytes.
   Every signed publish goes through Signer.sign, which refuses payloads shorter than the
   signature: an empty DDS sample stalls every later sample of its reliable writer.
@@ -24,19 +25,28 @@ from typing import Callable, Collection, Optional
 from rclpy.serialization import deserialize_message, serialize_message
 
 from sat_agent.message_auth import (AUTH_OFF_WARNING, AuthError, key_from_parameter,
-                                    MessageVerifier, Signed, Signer, StepWindow, WORLD_SENDER)
+                                    MessageVerifier, NO_RUN_ID_WARNING, Signed, Signer,
+                                    StepWindow, WORLD_SENDER)
 from sat_agent.ros.msg_conversions import InvalidMessage
 
 
-def auth_key(node, path: str) -> Optional[bytes]:
-    """Return the key of the node's ``auth_key_file`` (None: authentication off, warned at WARN).
+def auth_key(node, params) -> Optional[bytes]:
+    """Return the run's key of params' ``auth_key_file`` and ``auth_run_id`` (None: auth off).
+
+    params: the node's node_params.InputParams. Authentication off and a key without a run id
+    are warned at WARN, a run id logged at INFO.
 
     A key file that cannot be used raises message_auth.KeyFileError (a ValueError naming the
     path): node_runner prints it as one line and the process exits with code 2.
     """
-    key = key_from_parameter(path)
+    key = key_from_parameter(params.auth_key_file, params.auth_run_id)
     if key is None:
         node.get_logger().warning(AUTH_OFF_WARNING)
+    elif params.auth_run_id:
+        # A node given another run's id refuses all the run's messages as bad_signature.
+        node.get_logger().info(f'signing and verifying for run {params.auth_run_id!r}')
+    else:
+        node.get_logger().warning(NO_RUN_ID_WARNING)
     return key
 
 

@@ -74,7 +74,7 @@ def observer_input(node, params, run):
     params: its SatParams; run: its ObserverParams (the agents it watches, the key file).
     """
     guard = InputGuard(node, node.get_name(), run.diagnostics_period)
-    inputs = VerifiedInput(node, guard, auth_key(node, run.auth_key_file), run.agent_ids,
+    inputs = VerifiedInput(node, guard, auth_key(node, run), run.agent_ids,
                            WINDOW, window_without_key=True)
     return inputs, MessageLimits.compute(params, len(run.agent_ids))
 

@@ -131,7 +131,7 @@ class WorldSimNode(Node):
         self.ids = self.world.agent_ids
         self.attendance = Attendance(self.ids)
         self.guard = InputGuard(self, 'world_sim', node.diagnostics_period)
-        key = auth_key(self, node.auth_key_file)
+        key = auth_key(self, node)
         self.inputs = VerifiedInput(self, self.guard, key, self.ids, WINDOW)
         self.limits = MessageLimits.compute(self.params, len(self.ids))
         self.signer = Signer(key, WORLD_SENDER)
