@@ -1,17 +1,22 @@
 """The start-up handshake's rule (sat_agent.ros.readiness), without a graph.
 
 What world_sim waits for (unmet), what it takes as an announcement (parse), what it takes with
-the run's key (seal, unseal: a signed envelope) and what it keeps (Announcements).
+the run's key (seal, unseal: a signed envelope) and what it keeps (Announcements); and, on one
+node of the test process, how often a node announces (ReadyAnnouncer).
 """
 
 import json
+import time
 
 import pytest
+import rclpy
+from ros_harness import ros_node, spin_until
+from std_msgs.msg import String
 
 from sat_agent.message_auth import MonotonicCounter
 from sat_agent.ros.readiness import (
-    announcement, AnnouncementError, Announcements, MAX_ANNOUNCEMENT_BYTES, parse, seal, unmet,
-    unseal)
+    announcement, AnnouncementError, Announcements, MAX_ANNOUNCEMENT_BYTES, parse, QOS,
+    ReadyAnnouncer, RESEND_S, seal, TOPIC, unmet, unseal)
 
 KEY = bytes(range(32))
 
@@ -163,3 +168,31 @@ def test_world_sim_keeps_a_nodes_announcement_only_while_its_counter_grows():
     plain = Announcements(room=1)
     assert plain.take(later, None) is None and plain.take(first, None) is None
     assert plain['/a'] == first
+
+
+def spin_for(node, seconds: float):
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.05)
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_a_node_announces_again_until_it_sees_the_run_start():
+    # A flood of the topic can push a node's announcement out of world_sim's reader before it
+    # is taken; one sent only once (or only on a change) would then hold the start.
+    started = []
+    with ros_node('announcer') as node:
+        heard = []
+        node.create_subscription(String, TOPIC, lambda msg: heard.append(unseal(msg.data, KEY)),
+                                 QOS)
+        ReadyAnnouncer(node, [], key=KEY, observer=True, started=lambda: bool(started))
+        spin_until(node, lambda: len(heard) >= 3, 10 * RESEND_S, 'three announcements')
+        texts, counters = zip(*heard)
+        assert len(set(texts)) == 1 and json.loads(texts[0])['observer'] is True
+        assert list(counters) == sorted(set(counters))    # each a new envelope
+        started.append(True)
+        spin_for(node, 0.5)
+        sent = len(heard)
+        spin_for(node, 3 * RESEND_S)
+        assert len(heard) == sent

@@ -14,10 +14,13 @@ writes, how many readers its writer has matched::
     {"node": "/agent_1/agent", "reads": ["/agent_1/measurements", ...],
      "writes": {"/agent_1/cmd": 2, "/agent_1/status": 3, ...}}
 
-once every subscription it reads the run through has a publisher, and again whenever a writer's
-count changes. A node that writes an agent's commands speaks for that agent, unless it says
-``"observer": true`` (a test that attacks a run writes on an agent's topics too, and is one of
-the observers world_sim waits for). world_sim starts when every agent and ``observers`` other
+once every subscription it reads the run through has a publisher, again whenever a writer's
+count changes, and again every RESEND_S until the node sees the run start: a flood of
+TOPIC deeper than world_sim's reader pushes samples out before they are taken, and a node
+that announced once would then hold the start until the start-up timeout. A node that writes
+an agent's commands speaks for that agent, unless it says ``"observer": true`` (a test that
+attacks a run writes on an agent's topics too, and is one of the observers world_sim waits
+for). world_sim starts when every agent and ``observers`` other
 nodes have announced and every writer (theirs and its own) has matched at least as many readers
 as the announced nodes (and world_sim itself) that read its topic: ``unmet`` says what is
 still missing.
@@ -41,8 +44,10 @@ start or after.
 
 import hmac
 import json
+import math
 import re
-from typing import Iterable, List, Mapping, Optional, Tuple
+import time
+from typing import Callable, Iterable, List, Mapping, Optional, Tuple
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import String
@@ -56,6 +61,8 @@ TOPIC = '/world/ready'
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                  durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CHECK_PERIOD_S = 0.1
+# An unchanged announcement is sent again after this long, until the run starts.
+RESEND_S = 1.0
 # An 80-agent recorder announces ~1,200 topics of ~40 characters (~50 KiB): room for more.
 MAX_ANNOUNCEMENT_BYTES = 256 * 1024
 # Nodes kept besides the agents and the observers world_sim waits for (a test's scripted nodes,
@@ -218,37 +225,44 @@ def unmet(announcements: Mapping[str, Mapping], own_reads: Iterable[str],
 
 
 class ReadyAnnouncer:
-    """Announce a node on TOPIC (module docstring) until stop() or, without writers, once.
+    """Announce a node on TOPIC (module docstring) until stop() or started() says the run began.
 
     subscriptions: those the node reads the run through (each must have a publisher first);
     publishers: the node's writers whose matched readers world_sim checks; observer: the node
-    is an observer even if it writes an agent's commands; key: the run's key, to sign with.
+    is an observer even if it writes an agent's commands; key: the run's key, to sign with;
+    started: whether the node has taken a message of the run (world_sim sends none before
+    step 1; None: announce until stop()).
     """
 
     def __init__(self, node, subscriptions, publishers=(), period: float = CHECK_PERIOD_S,
-                 observer: bool = False, key: Optional[bytes] = None):
+                 observer: bool = False, key: Optional[bytes] = None,
+                 started: Optional[Callable[[], bool]] = None):
         self._node = node
         self._key = key
         self._counter = MonotonicCounter()
         self._subscriptions = list(subscriptions)
         self._publishers = list(publishers)
         self._observer = observer
+        self._started = started
         self._announced = None
+        self._sent_at = -math.inf
         self._publisher = node.create_publisher(String, TOPIC, QOS)
         self._timer = steady_timer(node, period, self._check)
 
     def _check(self):
+        if self._started is not None and self._started():
+            self.stop()
+            return
         if not all(s.get_publisher_count() > 0 for s in self._subscriptions):
             return
         text = announcement(self._node.get_fully_qualified_name(),
                             (s.topic_name for s in self._subscriptions),
                             {p.topic_name: p.get_subscription_count() for p in self._publishers},
                             self._observer)
-        if text != self._announced:
+        now = time.monotonic()
+        if text != self._announced or now - self._sent_at >= RESEND_S:
             self._publisher.publish(String(data=seal(text, self._key, self._counter)))
-            self._announced = text
-        if not self._publishers:
-            self.stop()
+            self._announced, self._sent_at = text, now
 
     def stop(self):
         """No more announcements (the run started: nobody waits for them any more)."""

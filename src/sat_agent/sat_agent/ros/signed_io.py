@@ -111,6 +111,10 @@ class VerifiedInput:
                 callback(msg)
         return self.node.create_subscription(msg_type, topic, on_data, qos, raw=True)
 
+    def took_any(self) -> bool:
+        """Whether a message passed the signature checks (with a key: the run has started)."""
+        return bool(self.verifier.accepted)
+
     def receive(self, channel: str, data: bytes, msg_type, max_bytes: int,
                 sender: Optional[int] = None, relayed: bool = False,
                 origin: Optional[Callable[[int], str]] = None, names_sender: bool = True,

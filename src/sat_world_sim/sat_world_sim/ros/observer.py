@@ -2,7 +2,8 @@
 
 Their parameters are sat_agent.node_params.ObserverParams (LoggerParams for the logger).
 
-**Readiness.** Each observer announces itself once all its subscriptions have a publisher
+**Readiness.** Each observer announces itself once all its subscriptions have a publisher,
+and again every second until it takes the run's first message
 (sat_agent.ros.readiness.ReadyAnnouncer); world_sim waits for ``observers`` of them, and for
 the writers of what they read to have matched them, before step 1, so no observer misses the
 run's first messages.
@@ -110,4 +111,5 @@ def watch_run(node, params, run, add) -> Watch:
     subscriptions = [inputs.subscribe(cls, topic, lambda msg, topic=topic: add(topic, msg), qos,
                                       content=content, **signature_of(topic, limits))
                      for topic, cls, qos, content in topics]
-    return Watch(inputs, ReadyAnnouncer(node, subscriptions, key=inputs.verifier.key))
+    return Watch(inputs, ReadyAnnouncer(node, subscriptions, key=inputs.verifier.key,
+                                        started=inputs.took_any))

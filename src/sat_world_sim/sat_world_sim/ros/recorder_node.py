@@ -106,7 +106,8 @@ class RecorderNode(Node):
                 lambda data, c=connection, t=topic,
                 signature=signatures[topic.name]: self._take(c, t, signature, data),
                 qos, raw=True))
-        self.ready = ReadyAnnouncer(self, subscriptions, key=self.inputs.verifier.key)
+        self.ready = ReadyAnnouncer(self, subscriptions, key=self.inputs.verifier.key,
+                                    started=self.inputs.took_any)
         steady_timer(self, 0.2, self._tick)
 
     def _take(self, connection, topic: Topic, signature, data: bytes):
