@@ -3,8 +3,9 @@
 One short lock-step run of two agents in radio range, with a key, attacked from the test
 process (hostile.py) at the steps it sees agent 1's scans: a command hijack (unsigned, with
 a wrong key, and replays of agent 1's genuine commands), a step jump (scans of step k + 999),
-phantom scans (ten forged detections near a fake target, from a wrong key, and scans as a
-recording of another run under the same key would hold them, session 75), agent 2's genuine
+phantom scans (ten forged detections near a fake target, from a wrong key, and signed with the
+key file's key itself, as a run without a run id signs: a node that ignored its run id would
+take them, session 75), agent 2's genuine
 reports published straight on agent 1's inbox, an unknown agent 99 (without the key, and as
 an insider with a valid world seal), replays of a genuine /world/step and of a genuine
 delivery, and malformed start-up announcements on /world/ready (JSON nested past the parser's
@@ -27,7 +28,7 @@ from std_msgs.msg import String
 from test_swarm_ros import inprocess_metrics
 
 from sat_agent.message_auth import (AuthError, load_key, MessageVerifier, MonotonicCounter,
-                                    run_key, Signer, StepWindow, WORLD_SENDER)
+                                    Signer, StepWindow, WORLD_SENDER)
 from sat_agent.ros import readiness
 from sat_agent.topic_names import radio_topic
 from sat_msgs.msg import AgentMode, ControlCommand, MeasurementSet, RangeBearing, WorldStep
@@ -58,8 +59,8 @@ def scan(step, detections=()):
                           detections=[RangeBearing(range=r, bearing=b) for r, b in detections])
 
 
-def attack(hostile, sent, k, key, other_run):
-    """Everything sent at agent 1's scan of step k (other_run: another run's key, same file)."""
+def attack(hostile, sent, k, key, bare_key):
+    """Everything sent at agent 1's scan of step k (bare_key: the key file's, no run id)."""
     topic = '/agent_1/measurements'
     if k in HIJACK:
         hijack(hostile, sent, k, key)
@@ -69,7 +70,7 @@ def attack(hostile, sent, k, key, other_run):
     if k in PHANTOM:
         phantom = scan(k + 1, [(2.0 + 0.01 * i, 0.5) for i in range(10)])
         hostile.send(topic, MeasurementSet, forge(phantom, topic, k + 1, 0, bytes(32)))
-        hostile.send(topic, MeasurementSet, forge(phantom, topic, k + 1, 0, other_run))
+        hostile.send(topic, MeasurementSet, forge(phantom, topic, k + 1, 0, bare_key))
         sent[(AGENT_1, 'bad_signature')] += 2
     if k == 7:
         # Agent 2's genuine reports of the last step, straight on agent 1's inbox: no seal.
@@ -118,7 +119,7 @@ def attack(hostile, sent, k, key, other_run):
 def attacked(tmp_path_factory):
     """Run the attacked swarm once; return (metrics, expected metrics, sent, diagnostics)."""
     tmp_path, scenario, key_file, key = attack_setup(tmp_path_factory, 'attacked', 3, STEPS)
-    other_run = run_key(load_key(key_file), 'the-run-before')
+    bare_key = load_key(key_file)
     sent = Counter()
     with ros_node('hostile') as node:
         hostile = Hostile(node)
@@ -134,7 +135,7 @@ def attacked(tmp_path_factory):
             return [hostile.capture('/agent_1/measurements', MeasurementSet, RELIABLE,
                                     lambda data: genuine_scan(data, key)
                                     and attack(hostile, sent, scan_step(data), key,
-                                               other_run)),
+                                               bare_key)),
                     hostile.capture('/agent_1/cmd', ControlCommand,
                                     keep=lambda data: genuine(data, key, '/agent_1/cmd', 1)),
                     hostile.capture(radio_topic(2, 'out', 'mode'), AgentMode),
@@ -199,7 +200,7 @@ def test_a_scan_from_the_far_future_is_refused_and_the_agent_keeps_stepping(atta
 
 
 def test_phantom_scans_are_refused_and_leave_no_phantom_estimate(attacked):
-    # Each phantom comes twice: with a wrong key, and signed for another run under the key.
+    # Each phantom comes twice: with a wrong key, and with the key file's key itself.
     metrics, expected, sent, diagnostics = attacked
     assert diagnostics.dropped(AGENT_1, 'bad_signature') == sent[(AGENT_1, 'bad_signature')] \
         == 2 * len(PHANTOM)

@@ -25,6 +25,7 @@ def options(*argv):
 
 def test_a_run_key_is_made_in_a_private_directory_outside_the_run_and_passed_as_a_path():
     opts = options()
+    bringup.check_auth(opts)
     key_dir = bringup.run_key(opts)
     try:
         assert stat.S_IMODE(key_dir.stat().st_mode) == 0o700
@@ -49,81 +50,72 @@ def test_a_given_key_file_or_no_auth_makes_no_key():
                    for p in bringup.process_list(options('--no-auth'), [1], 1))
 
 
-@pytest.mark.parametrize('content, mode, problem', [
-    (None, None, 'cannot open it'), (b'short', 0o600, '5 bytes'),
-    (os.urandom(32), 0o644, 'chmod 600')])
-def test_a_bad_key_file_stops_the_bring_up_before_anything_starts(
-        tmp_path, content, mode, problem):
-    key = tmp_path / 'swarm.key'
-    if content is not None:
-        key.write_bytes(content)
-        key.chmod(mode)
-    run_dir = tmp_path / 'run'
-    result = subprocess.run(
-        [sys.executable, executable('sat_world_sim', 'swarm'), '--scenario', str(PAPER),
-         '--run-dir', str(run_dir), '--key-file', str(key)],
-        capture_output=True, text=True, timeout=60)
-    assert result.returncode == 2
-    lines = result.stderr.strip().splitlines()
-    assert len(lines) == 1 and str(key) in lines[0] and problem in lines[0], result.stderr
-    assert not run_dir.exists()
+@pytest.fixture
+def key_file(tmp_path) -> str:
+    return str(create_key_file(tmp_path / 'swarm.key'))
 
 
-def test_no_auth_and_a_key_file_together_are_refused(tmp_path):
-    with pytest.raises(bringup.KeyFileError, match='choose one'):
-        bringup.check_auth(options('--no-auth', '--key-file', str(tmp_path / 'k')))
+def run_ids(processes) -> set:
+    """Return the auth_run_id arguments of the processes."""
+    return {arg for p in processes for arg in p.ros_arguments if arg.startswith('auth_run_id:=')}
 
 
-def run_ids(opts) -> set:
-    """Return the auth_run_id values the processes of opts get."""
-    return {arg.split(':=', 1)[1] for p in bringup.process_list(opts, [1, 2], 1)
-            for arg in p.ros_arguments if arg.startswith('auth_run_id:=')}
+def checked(*argv):
+    """Return the options of argv after check_auth (a signed run's id given)."""
+    opts = options(*argv)
+    bringup.check_auth(opts)
+    return opts
 
 
-def test_every_signed_run_gets_a_new_id_and_every_process_the_same():
-    first, second = options('--key-file', '/some/key'), options('--key-file', '/some/key')
+def test_every_signed_run_gets_a_new_id_and_every_process_the_same(key_file):
+    first, second = checked('--key-file', key_file), checked('--key-file', key_file)
     for opts in (first, second):
-        bringup.run_identity(opts)
-        assert len(run_ids(opts)) == 1 and re.fullmatch('[0-9a-f]{32}', opts.run_id)
-        assert all('auth_run_id:=' in ' '.join(p.ros_arguments)
-                   for p in bringup.process_list(opts, [1, 2], 1))
+        assert re.fullmatch('[0-9a-f]{32}', opts.run_id)
+        # Quoted: YAML would read an id such as 42 or yes as a number or a bool.
+        assert run_ids(bringup.process_list(opts, [1, 2], 1)) == {
+            f"auth_run_id:='{opts.run_id}'"}
     assert first.run_id != second.run_id
-    chosen = options('--key-file', '/some/key', '--run-id', 'mission-7')
-    bringup.run_identity(chosen)
-    assert run_ids(chosen) == {'mission-7'}
-    # The bring-up's own key gets one too (run_identity runs before run_key); no key, none.
-    own = options()
-    bringup.run_identity(own)
+    chosen = checked('--key-file', key_file, '--run-id', '42')
+    assert run_ids(bringup.process_list(chosen, [1, 2], 1)) == {"auth_run_id:='42'"}
+    # The bring-up's own key gets one too (check_auth runs before run_key); no key, none.
+    own = checked()
     key_dir = bringup.run_key(own)
     try:
-        assert run_ids(own) == {own.run_id}
+        assert run_ids(bringup.process_list(own, [1], 1)) == {f"auth_run_id:='{own.run_id}'"}
     finally:
         shutil.rmtree(key_dir)
-    off = options('--no-auth')
-    bringup.run_identity(off)
-    assert off.run_id is None and not run_ids(off)
+    off = checked('--no-auth')
+    assert off.run_id is None and not run_ids(bringup.process_list(off, [1], 1))
+    # A key file without an id (check_auth skipped) is a programming error, not id-less signing.
+    with pytest.raises(ValueError, match='no run id'):
+        bringup.process_list(options('--key-file', key_file), [1], 1)
 
 
-def test_the_launch_gives_a_run_with_a_key_file_an_id_as_the_bring_up_does():
+def test_the_launch_gives_a_run_with_a_key_file_an_id_as_the_bring_up_does(key_file):
     launch = load_module(LAUNCH_FILE, 'swarm_launch')
-    values = {'run_dir': 'runs/x', 'key_file': '/some/key'}
-    ids = [{arg for p in launch.processes(values)[0] for arg in p.ros_arguments
-            if arg.startswith('auth_run_id:=')} for _ in range(2)]
+    values = {'run_dir': 'runs/x', 'key_file': key_file}
+    ids = [run_ids(launch.processes(values)[0]) for _ in range(2)]
     assert all(len(each) == 1 for each in ids) and ids[0] != ids[1]
     processes, _ = launch.processes({**values, 'run_id': 'mission-7'})
-    chosen = options('--run-dir', 'runs/x', '--key-file', '/some/key', '--run-id', 'mission-7')
-    assert processes == bringup.load_run(bringup.parse_args(
-        ['--run-dir', 'runs/x', '--key-file', '/some/key', '--run-id', 'mission-7']))
-    assert run_ids(chosen) == {'mission-7'}
+    same = bringup.parse_args(['--run-dir', 'runs/x', '--key-file', key_file,
+                               '--run-id', 'mission-7'])
+    bringup.check_auth(same)
+    assert processes == bringup.load_run(same)
+    # As the bring-up, the launch refuses a key with no_auth (it signed with the bare key).
+    with pytest.raises(bringup.KeyFileError, match='choose one'):
+        launch.processes({**values, 'no_auth': 'true'})
+    with pytest.raises(bringup.RunIdError, match='allowed'):
+        launch.processes({**values, 'run_id': '...'})
 
 
 @pytest.mark.parametrize('argv, problem', [
     (('--no-auth', '--run-id', 'm1'), 'choose one'),
     (('--run-id', 'a b'), 'allowed: 1 to 64'), (('--run-id', 'x:=y'), 'allowed: 1 to 64'),
-    (('--run-id', 'r' * 65), 'allowed: 1 to 64')])
+    (("--run-id='q'",), 'allowed: 1 to 64'), (('--run-id=-abc',), 'allowed: 1 to 64'),
+    (('--run-id', '...'), 'allowed: 1 to 64'), (('--run-id', 'r' * 65), 'allowed: 1 to 64')])
 def test_a_bad_run_id_is_refused_naming_it(argv, problem):
     with pytest.raises(bringup.RunIdError, match=problem):
-        bringup.run_identity(options(*argv))
+        checked(*argv)
 
 
 def test_a_bad_run_id_stops_the_bring_up_before_anything_starts(tmp_path):
@@ -134,7 +126,8 @@ def test_a_bad_run_id_stops_the_bring_up_before_anything_starts(tmp_path):
         capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert result.stderr.strip() == ("swarm: --run-id 'two words': allowed: 1 to 64 of the "
-                                     'characters A-Z a-z 0-9 . _ -'), result.stderr
+                                     "characters A-Z a-z 0-9 . _ -, not starting with '.' or "
+                                     "'-'"), result.stderr
     assert not run_dir.exists()
 
 
@@ -144,7 +137,9 @@ def test_the_paper_run_gives_the_same_metrics_with_authentication_on_and_off(tmp
     texts, outputs = {}, {}
     key = str(create_key_file(tmp_path / 'swarm.key'))
     # With a key file of yours every process must get the run's one id, or nothing verifies.
-    for name, flags in (('on', ()), ('off', ('--no-auth',)), ('own_key', ('--key-file', key))):
+    # Run id 42: a node that read it as YAML would take a number and exit.
+    for name, flags in (('on', ()), ('off', ('--no-auth',)),
+                        ('own_key', ('--key-file', key, '--run-id', '42'))):
         code, metrics, outputs[name] = run_swarm(tmp_path / name, PAPER, '--steps', '40',
                                                  '--no-view', '--no-record', *flags)
         assert code == 0, outputs[name][-3000:]
@@ -153,8 +148,8 @@ def test_the_paper_run_gives_the_same_metrics_with_authentication_on_and_off(tmp
         log = (tmp_path / name / 'logs' / 'agent_1.log').read_text()
         assert ('authentication is OFF' in log) == (name == 'off')
     assert 'authentication is OFF' in outputs['off']   # the bring-up's own warning
-    for name in ('on', 'own_key'):
-        assert re.search(r', run id [0-9a-f]{32}\n', outputs[name])
+    assert re.search(r', run id [0-9a-f]{32}\n', outputs['on'])
+    assert ', run id 42\n' in outputs['own_key']
     assert ', run id' not in outputs['off']
     assert texts['on'] == texts['off'] == texts['own_key']
     # The run's key directory is gone; nothing of it is left in the run directory.

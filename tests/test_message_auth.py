@@ -4,6 +4,8 @@ Most tests sign synthetic CDR payloads (the module is bytes in, bytes out); the 
 the end check on rclpy's serializer that the tail lands where message_auth reads it.
 """
 
+import hashlib
+import hmac
 import os
 import stat
 import struct
@@ -329,7 +331,8 @@ def test_a_recording_of_one_run_does_not_verify_in_another_run_under_the_same_ke
     # the run's own key (run_key) keeps another run's recorded messages and seals out.
     run_a, run_b = auth.run_key(KEY, 'mission-a'), auth.run_key(KEY, 'mission-b')
     assert len({KEY, run_a, run_b}) == 3 and auth.run_key(KEY, '') == KEY
-    assert auth.run_key(KEY, 'mission-a') == run_a
+    # Pinned: nodes of two versions must derive the same run key.
+    assert run_a == hmac.new(KEY, b'sat-swarm run v1\x00mission-a', hashlib.sha256).digest()
     recorded = Signer(run_a, 2).sign('/agent_2/cmd', payload(), 10)
     assert verifier(10, key=run_a).verify('/agent_2/cmd', recorded).sender == 2
     refused(lambda: verifier(10, key=run_b).verify('/agent_2/cmd', recorded), 'bad_signature')

@@ -28,7 +28,7 @@ from sat_world_sim import bringup
 def processes(values):
     """Return (processes, extra environment) for launch argument values (name -> string)."""
     options = bringup.options_from_launch(values)
-    bringup.run_identity(options)
+    bringup.check_auth(options)
     return bringup.load_run(options), bringup.run_env(options.fastdds_profile, options.domain_id)
 
 

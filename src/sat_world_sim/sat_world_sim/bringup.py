@@ -71,8 +71,9 @@ MAX_RESPAWNS = 5
 # Options of the supervision only (not of the run): the launch file has no use for them.
 # (--netns places the processes itself; a launch file would use launch_ros's prefix.)
 SUPERVISION_OPTIONS = ('timeout', 'quiet', 'print_ros2_run', 'netns')
-# A run id goes on command lines (-p auth_run_id:=...): no spaces, quotes or ':='.
-RUN_ID = re.compile(r'[A-Za-z0-9._-]{1,64}')
+# A run id goes on command lines (-p auth_run_id:='...', quoted so that YAML reads 42 or yes as
+# a string): no spaces, quotes or ':=', and no leading '-' (an option to argparse and rcl).
+RUN_ID = re.compile(r'[A-Za-z0-9_][A-Za-z0-9._-]{0,63}')
 
 
 def executable(package: str, name: str) -> str:
@@ -225,7 +226,9 @@ def process_list(options, agent_ids: Sequence[int], scenario_seed: int) -> List[
     ``ros2 run`` of these lines is the same run as the bring-up's.
     """
     key = ('-p', f'auth_key_file:={options.key_file}') if options.key_file else ()
-    key += ('-p', f'auth_run_id:={options.run_id}') if key and options.run_id else ()
+    if key and not options.run_id:
+        raise ValueError('process_list: a key file and no run id (check_auth gives one)')
+    key += ('-p', f"auth_run_id:='{options.run_id}'") if key else ()
     params = ('--params-file', str(options.params), '-p', 'use_sim_time:=true', *key)
     # What world_sim and the agents share (node_params.SteppingParams).
     stepping = ('-p', f'view_rate:={options.view_rate}') if options.view_rate is not None else ()
@@ -350,8 +353,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument('--run-id', default=None,
                         help="this run's id, bound into every signature so that a recording of "
                              'another run under the same key is refused; give every machine of '
-                             'one run the same (1-64 of A-Z a-z 0-9 . _ -; default: a new one '
-                             'per run)')
+                             'one run the same (1-64 of A-Z a-z 0-9 . _ -, not starting with . '
+                             'or -; default: a new one per run)')
     parser.add_argument('--netns', action='store_true',
                         help='world_sim and the observers on one network namespace, each agent '
                              'process on its own, DDS over UDP between them (root only)')
@@ -509,20 +512,19 @@ def run_on_hosts(processes: Sequence[Process], env: dict, options) -> int:
         return run(*args, net=net)
 
 
-def check_auth(options):
-    """Check the authentication options before anything starts (KeyFileError names the path)."""
-    if options.no_auth and options.key_file:
-        raise KeyFileError(f'--no-auth and --key-file {options.key_file}: choose one')
-    if options.key_file:
-        load_key(options.key_file)
-
-
 class RunIdError(ValueError):
     """A --run-id that cannot be used; the message names it and what is allowed."""
 
 
-def run_identity(options):
-    """Check --run-id, or give a signed run a new one (module docstring). Raises RunIdError."""
+def check_auth(options):
+    """Check the authentication options before anything starts; give a signed run its id.
+
+    Raises KeyFileError (naming the path) or RunIdError (module docstring).
+    """
+    if options.no_auth and options.key_file:
+        raise KeyFileError(f'--no-auth and --key-file {options.key_file}: choose one')
+    if options.key_file:
+        load_key(options.key_file)
     if options.run_id is None:
         if not options.no_auth:
             options.run_id = secrets.token_hex(16)
@@ -532,7 +534,7 @@ def run_identity(options):
                          'choose one')
     if not RUN_ID.fullmatch(options.run_id):
         raise RunIdError(f'--run-id {options.run_id!r}: allowed: 1 to 64 of the characters '
-                         'A-Z a-z 0-9 . _ -')
+                         "A-Z a-z 0-9 . _ -, not starting with '.' or '-'")
 
 
 def run_key(options) -> Optional[Path]:
@@ -553,7 +555,6 @@ def main(argv=None) -> int:
     options = args if args.print_ros2_run else absolute(args)
     try:
         check_auth(options)
-        run_identity(options)
         check_netns(options)
     except (KeyFileError, RunIdError, netns.NetnsError) as error:
         print(f'swarm: {error}', file=sys.stderr)
