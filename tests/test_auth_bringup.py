@@ -1,5 +1,6 @@
 """The bring-up's key handling, and the paper run with authentication on and off (issue 17)."""
 
+import json
 import os
 from pathlib import Path
 import re
@@ -10,7 +11,7 @@ import sys
 import time
 
 import pytest
-from ros_harness import executable, REPO, run_swarm
+from ros_harness import executable, REPO, run_swarm, started
 from test_launch_parity import LAUNCH_FILE, load_module
 
 from sat_agent.message_auth import create_key_file
@@ -177,3 +178,38 @@ def test_a_childs_log_shows_each_line_while_the_child_runs(tmp_path):
         assert child.poll() is None
     finally:
         child.stop()
+
+
+# What a recording holds that the next run's nodes verify: the world's and one agent's topics.
+SIGNED_TOPICS = ('/world/step', '/world/truth', '/world/radio', '/agent_1/measurements',
+                 '/agent_1/cmd', '/agent_1/status', '/agent_1/radio/in/mode',
+                 '/agent_2/radio/out/estimate')
+
+
+def without_drops(run_dir: Path) -> dict:
+    metrics = json.loads((run_dir / 'metrics.json').read_text())
+    return {key: value for key, value in metrics.items() if key != 'dropped'}
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_a_recording_of_one_run_replayed_into_the_next_under_the_same_key_is_refused(tmp_path):
+    # One key file for both runs, as on drones that keep theirs. Until the run id, the second
+    # run's fresh replay counters took the first run's messages that came before the genuine
+    # ones on their topic (and refused the rest as 'replayed', which this test would see).
+    key = str(create_key_file(tmp_path / 'swarm.key'))
+    run = ('--steps', '30', '--no-view', '--key-file', key)
+    code, _, output = run_swarm(tmp_path / 'a', PAPER, *run, '--run-id', 'mission-a')
+    assert code == 0, output[-3000:]
+    replay = [executable('sat_world_sim', 'replay'), str(tmp_path / 'a' / 'bag'), '--loop',
+              '--rate', '5', '--match-timeout', '300', '--topics', *SIGNED_TOPICS]
+    with started(replay, tmp_path / 'replay.log') as replayer:
+        code, metrics, output = run_swarm(tmp_path / 'b', PAPER, *run, '--no-record',
+                                          '--run-id', 'mission-b')
+        replaying = replayer.poll() is None
+    assert code == 0, output[-3000:]
+    assert replaying, (tmp_path / 'replay.log').read_text()[-2000:]
+    # The replayed messages (the only ones of another key) reached the metrics node, which
+    # refused each for its signature, and the run is the unattacked one.
+    assert set(metrics['dropped']) == {'bad_signature'} and metrics['dropped']['bad_signature']
+    assert without_drops(tmp_path / 'b') == without_drops(tmp_path / 'a')
