@@ -41,7 +41,8 @@ swarm). Every MAC of a run is then made with that run's own key, ``run_key(key, 
 HMAC of the key over the run's id (the node parameter ``auth_run_id``; the bring-up and the
 launch make a new one per run), so a recording of one run replayed into another under the same
 key does not verify (``bad_signature``); otherwise the receivers' replay counters, fresh in
-every run, would take what of it comes before the sender's first genuine message on a topic. An empty id signs with the key itself (a node warns).
+every run, would take what of it comes before the sender's first genuine message on a topic.
+An empty id signs with the key itself (a node warns).
 
 **Off switch.** With no key (``key is None``) a Signer leaves the tail zero and a
 MessageVerifier accepts everything, counting it as ``unauthenticated``; the node must log
