@@ -11,11 +11,13 @@ import sys
 import time
 
 import pytest
-from ros_harness import executable, REPO, run_swarm, started
+from ros_harness import executable, REPO, ros_node, run_swarm, spin_until, started
 from test_launch_parity import LAUNCH_FILE, load_module
 
 from sat_agent.message_auth import create_key_file
+from sat_agent.ros.msg_conversions import message_class
 from sat_world_sim import bringup
+from sat_world_sim.topics import graph_topics
 
 PAPER = REPO / 'config' / 'scenarios' / 'paper.yaml'
 
@@ -184,6 +186,7 @@ def test_a_childs_log_shows_each_line_while_the_child_runs(tmp_path):
 SIGNED_TOPICS = ('/world/step', '/world/truth', '/world/radio', '/agent_1/measurements',
                  '/agent_1/cmd', '/agent_1/status', '/agent_1/radio/in/mode',
                  '/agent_2/radio/out/estimate')
+TYPES = {topic.name: topic.msgtype for topic in graph_topics([1, 2])}
 
 
 def without_drops(run_dir: Path) -> dict:
@@ -196,14 +199,23 @@ def without_drops(run_dir: Path) -> dict:
 def test_a_recording_of_one_run_replayed_into_the_next_under_the_same_key_is_refused(tmp_path):
     # One key file for both runs, as on drones that keep theirs. Until the run id, the second
     # run's fresh replay counters took the first run's messages that came before the genuine
-    # ones on their topic (and refused the rest as 'replayed', which this test would see).
+    # ones on their topic: its agents took run A's last /world/step and exited at once.
     key = str(create_key_file(tmp_path / 'swarm.key'))
     run = ('--steps', '30', '--no-view', '--key-file', key)
     code, _, output = run_swarm(tmp_path / 'a', PAPER, *run, '--run-id', 'mission-a')
     assert code == 0, output[-3000:]
     replay = [executable('sat_world_sim', 'replay'), str(tmp_path / 'a' / 'bag'), '--loop',
               '--rate', '5', '--match-timeout', '300', '--topics', *SIGNED_TOPICS]
-    with started(replay, tmp_path / 'replay.log') as replayer:
+    heard = []
+    with ros_node('replay_listener') as node, \
+            started(replay, tmp_path / 'replay.log') as replayer:
+        # The replay publishes once every topic has a reader: this node's, until run B's come.
+        for topic in SIGNED_TOPICS:
+            node.create_subscription(message_class(TYPES[topic]), topic,
+                                     lambda data, topic=topic: heard.append(topic), 10,
+                                     raw=True)
+        spin_until(node, lambda: set(heard) == set(SIGNED_TOPICS), 120,
+                   'the replay of run A on every topic', [replayer])
         code, metrics, output = run_swarm(tmp_path / 'b', PAPER, *run, '--no-record',
                                           '--run-id', 'mission-b')
         replaying = replayer.poll() is None
