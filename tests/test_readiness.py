@@ -13,7 +13,7 @@ import rclpy
 from ros_harness import ros_node, spin_until
 from std_msgs.msg import String
 
-from sat_agent.message_auth import MonotonicCounter
+from sat_agent.message_auth import MonotonicCounter, run_key
 from sat_agent.ros.readiness import (
     announcement, AnnouncementError, Announcements, MAX_ANNOUNCEMENT_BYTES, parse, QOS,
     ReadyAnnouncer, RESEND_S, seal, TOPIC, unmet, unseal)
@@ -153,6 +153,19 @@ def test_with_a_key_anything_but_a_verified_envelope_is_refused_with_its_reason(
     with pytest.raises(AnnouncementError) as error:
         unseal(data, KEY)
     assert error.value.reason == reason
+
+
+def test_an_announcement_of_another_run_is_refused_naming_the_node_it_claims_to_be():
+    # Nodes given different run ids (or keys) refuse each other: the log line says who and why.
+    other_run = seal(announcement('/agent_1/agent', [], {}), run_key(KEY, 'other-run'),
+                     MonotonicCounter())
+    with pytest.raises(AnnouncementError) as error:
+        unseal(other_run, KEY)
+    assert error.value.reason == 'bad_signature'
+    assert "'/agent_1/agent' (unverified) does not verify (a node of another key or run id?)" \
+        in str(error.value)
+    with pytest.raises(AnnouncementError, match='the MAC of an announcement does not'):
+        unseal(envelope(signed='[1]', mac='00' * 32), KEY)
 
 
 def test_world_sim_keeps_a_nodes_announcement_only_while_its_counter_grows():

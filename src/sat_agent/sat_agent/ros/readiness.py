@@ -128,8 +128,18 @@ def unseal(data: str, key: Optional[bytes]) -> Tuple[str, Optional[int]]:
         raise AnnouncementError('not a signed announcement', 'unsigned')
     text, counter = envelope['signed'], envelope['counter']
     if not hmac.compare_digest(envelope['mac'], text_mac(key, TOPIC, text, counter)):
-        raise AnnouncementError('its MAC does not verify', 'bad_signature')
+        raise AnnouncementError(f'the MAC of {_claimed_name(text)} does not verify (a node of '
+                                'another key or run id?)', 'bad_signature')
     return text, counter
+
+
+def _claimed_name(text: str) -> str:
+    """Name the node an unverified announcement claims to be, for a log line (bounded)."""
+    try:
+        name = parse(text)['node']
+    except AnnouncementError:
+        return 'an announcement'
+    return f'the announcement of {name[:80]!r} (unverified)'
 
 
 def parse(text: str) -> dict:
