@@ -161,7 +161,8 @@ def announce(node, subscriptions, publishers=(), observer: bool = False, key=Non
     A test node that plays agents passes their writers, one that watches the run its
     subscriptions; world_sim counts a node that writes no agent's commands as an observer, and
     one that says observer (an attacker's writers on agents' topics). key: the run's key, which
-    a world_sim with a key needs the announcement signed with.
+    a world_sim with a key needs the announcement signed with. The node announces again every
+    readiness.RESEND_S while it lives (world_sim ignores announcements after the start).
     """
     from sat_agent.ros.readiness import ReadyAnnouncer
     return ReadyAnnouncer(node, subscriptions, publishers, observer=observer, key=key)

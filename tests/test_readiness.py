@@ -166,6 +166,11 @@ def test_an_announcement_of_another_run_is_refused_naming_the_node_it_claims_to_
         in str(error.value)
     with pytest.raises(AnnouncementError, match='the MAC of an announcement does not'):
         unseal(envelope(signed='[1]', mac='00' * 32), KEY)
+    # Bounded and escaped: a long name is cut, a newline cannot start a log line of its own.
+    with pytest.raises(AnnouncementError) as error:
+        unseal(seal(announcement('/x\n' + 'y' * 500, [], {}), bytes(32), MonotonicCounter()),
+               KEY)
+    assert '\n' not in str(error.value) and len(str(error.value)) < 200
 
 
 def test_world_sim_keeps_a_nodes_announcement_only_while_its_counter_grows():
@@ -196,14 +201,16 @@ def test_a_node_announces_again_until_it_sees_the_run_start():
     # is taken; one sent only once (or only on a change) would then hold the start.
     started = []
     with ros_node('announcer') as node:
-        heard = []
-        node.create_subscription(String, TOPIC, lambda msg: heard.append(unseal(msg.data, KEY)),
-                                 QOS)
+        heard, at = [], []
+        node.create_subscription(String, TOPIC, lambda msg: (
+            heard.append(unseal(msg.data, KEY)), at.append(time.monotonic())), QOS)
         ReadyAnnouncer(node, [], key=KEY, observer=True, started=lambda: bool(started))
         spin_until(node, lambda: len(heard) >= 3, 10 * RESEND_S, 'three announcements')
         texts, counters = zip(*heard)
         assert len(set(texts)) == 1 and json.loads(texts[0])['observer'] is True
         assert list(counters) == sorted(set(counters))    # each a new envelope
+        # Once a RESEND_S, not at every check of the timer (its period is a tenth of it).
+        assert min(b - a for a, b in zip(at, at[1:])) > 0.5 * RESEND_S
         started.append(True)
         spin_for(node, 0.5)
         sent = len(heard)

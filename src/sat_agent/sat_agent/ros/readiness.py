@@ -56,10 +56,13 @@ from sat_agent.message_auth import MonotonicCounter, text_mac
 from sat_agent.ros.node_runner import steady_timer
 
 TOPIC = '/world/ready'
-# Latched: world_sim started after a node still reads that node's last announcements. Each
-# node's writer keeps its own history, so the depth counts one node's announcements.
+# Latched: world_sim started after a node still reads that node's last announcement. world_sim's
+# reader keeps 100 (several nodes' announcements can wait in it); a node's writer keeps its
+# newest only (WRITER_QOS), which supersedes the rest: a reader that matches late gets one.
 QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                  durability=DurabilityPolicy.TRANSIENT_LOCAL)
+WRITER_QOS = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
 CHECK_PERIOD_S = 0.1
 # An unchanged announcement is sent again after this long, until the run starts.
 RESEND_S = 1.0
@@ -68,6 +71,8 @@ MAX_ANNOUNCEMENT_BYTES = 256 * 1024
 # Nodes kept besides the agents and the observers world_sim waits for (a test's scripted nodes,
 # several nodes of one process); the rest are dropped, so forged names cannot fill memory.
 EXTRA_ANNOUNCERS = 64
+# The longest unverified text whose claimed node name a refusal's log line gives.
+CLAIMED_NAME_TEXT_BYTES = 4096
 # An envelope's MAC: message_auth.text_mac's hex digest.
 _HEX_MAC = re.compile('[0-9a-f]{64}')
 
@@ -134,7 +139,12 @@ def unseal(data: str, key: Optional[bytes]) -> Tuple[str, Optional[int]]:
 
 
 def _claimed_name(text: str) -> str:
-    """Name the node an unverified announcement claims to be, for a log line (bounded)."""
+    """Name the node an unverified announcement claims to be, for a log line (bounded).
+
+    Only a short text is parsed: a forged one costs its sender's bytes, not world_sim's time.
+    """
+    if len(text) > CLAIMED_NAME_TEXT_BYTES:
+        return 'an announcement'
     try:
         name = parse(text)['node']
     except AnnouncementError:
@@ -256,7 +266,7 @@ class ReadyAnnouncer:
         self._started = started
         self._announced = None
         self._sent_at = -math.inf
-        self._publisher = node.create_publisher(String, TOPIC, QOS)
+        self._publisher = node.create_publisher(String, TOPIC, WRITER_QOS)
         self._timer = steady_timer(node, period, self._check)
 
     def _check(self):

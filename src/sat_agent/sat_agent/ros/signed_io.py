@@ -88,6 +88,7 @@ class VerifiedInput:
         self.verifier = MessageVerifier(key, senders, window, replays)
         self.window_without_key = window_without_key and key is None
         guard.auth = 'on' if key is not None else 'off'
+        self._took = False
 
     def subscribe(self, msg_type, topic: str, callback: Callable, qos, max_bytes: int,
                   sender: Optional[int] = None, relayed: bool = False,
@@ -112,8 +113,8 @@ class VerifiedInput:
         return self.node.create_subscription(msg_type, topic, on_data, qos, raw=True)
 
     def took_any(self) -> bool:
-        """Whether a message passed the signature checks (with a key: the run has started)."""
-        return bool(self.verifier.accepted)
+        """Whether a message passed every check and was taken (with a key: the run started)."""
+        return self._took
 
     def receive(self, channel: str, data: bytes, msg_type, max_bytes: int,
                 sender: Optional[int] = None, relayed: bool = False,
@@ -137,6 +138,7 @@ class VerifiedInput:
                 self.guard.drop(error.reason, f'{channel}: {error.detail}')
                 return None
         self.verifier.commit(channel)
+        self._took = True
         return msg
 
     def receive_report(self, parser, kind: str, channel: str, data: bytes, lattice,
@@ -160,6 +162,7 @@ class VerifiedInput:
             return None
         if not isinstance(part, InvalidMessage):
             self.verifier.commit(channel)
+            self._took = True
         return msg, part
 
     def check(self, channel: str, data: bytes, max_bytes: int, sender: Optional[int] = None,
@@ -172,11 +175,14 @@ class VerifiedInput:
         """
         try:
             if origin is not None:
-                return self.verifier.verify_delivery(channel, data, origin, max_bytes, commit)
-            return self.verifier.verify(channel, data, relayed, sender, max_bytes, commit)
+                signed = self.verifier.verify_delivery(channel, data, origin, max_bytes, commit)
+            else:
+                signed = self.verifier.verify(channel, data, relayed, sender, max_bytes, commit)
         except AuthError as error:
             self.guard.drop(error.reason, error.detail)
             return False
+        self._took = self._took or commit
+        return signed
 
     def confirm(self, channel: str, signed: Optional[Signed], msg,
                 names_sender: bool = True) -> bool:
