@@ -273,14 +273,18 @@ class ReadyAnnouncer:
         if self._started is not None and self._started():
             self.stop()
             return
+        now = time.monotonic()
+        due = now - self._sent_at >= RESEND_S
+        # Without writers a node announces the same text each time: build it only when due.
+        if not (due or self._publishers):
+            return
         if not all(s.get_publisher_count() > 0 for s in self._subscriptions):
             return
         text = announcement(self._node.get_fully_qualified_name(),
                             (s.topic_name for s in self._subscriptions),
                             {p.topic_name: p.get_subscription_count() for p in self._publishers},
                             self._observer)
-        now = time.monotonic()
-        if text != self._announced or now - self._sent_at >= RESEND_S:
+        if text != self._announced or due:
             self._publisher.publish(String(data=seal(text, self._key, self._counter)))
             self._announced, self._sent_at = text, now
 
